@@ -1,0 +1,107 @@
+"""The plain mesh the whole pipeline speaks: a name, float32 vertices, int32 triangles.
+
+Nothing here knows about Blender. The adapter layer turns objects and files into `Mesh`; the
+analysis only ever sees these arrays. Validation lives here so every entry point refuses the
+same bad input with the same message, naming the shape.
+"""
+from __future__ import annotations
+
+import hashlib
+from dataclasses import dataclass, field
+
+import numpy as np
+
+
+class InputError(ValueError):
+    """Bad input a person can act on: the message names the object or file and the problem."""
+
+
+@dataclass
+class Mesh:
+    """A triangle mesh with a name. `truth` holds ground truth when the input carries it
+    (keys: 'style', 'category', 'face_mask' (bool per face)); the analysis never reads it."""
+
+    name: str
+    vertices: np.ndarray                  # (N, 3) float32
+    faces: np.ndarray                     # (M, 3) int32, triangles
+    source: str = ""                      # file path or Blender object name it came from
+    truth: dict = field(default_factory=dict)
+
+    def __post_init__(self):
+        self.vertices = np.ascontiguousarray(self.vertices, dtype=np.float32).reshape(-1, 3)
+        self.faces = np.ascontiguousarray(self.faces, dtype=np.int32).reshape(-1, 3)
+
+    def content_hash(self) -> str:
+        """Digest of the geometry only: the cache key's mesh part (names and truth excluded)."""
+        h = hashlib.sha256()
+        h.update(np.int64(len(self.vertices)).tobytes())
+        h.update(self.vertices.tobytes())
+        h.update(self.faces.tobytes())
+        return h.hexdigest()[:32]
+
+
+def triangulate(polygons) -> np.ndarray:
+    """Fan-triangulate a list of index sequences (convex polygons, as OBJ files hold them)."""
+    tris = []
+    for poly in polygons:
+        for k in range(1, len(poly) - 1):
+            tris.append((poly[0], poly[k], poly[k + 1]))
+    return np.asarray(tris, dtype=np.int32).reshape(-1, 3)
+
+
+def face_areas(vertices: np.ndarray, faces: np.ndarray) -> np.ndarray:
+    """Area of each triangle (float64)."""
+    v = vertices.astype(np.float64)
+    a, b, c = v[faces[:, 0]], v[faces[:, 1]], v[faces[:, 2]]
+    return 0.5 * np.linalg.norm(np.cross(b - a, c - a), axis=1)
+
+
+def validate(mesh: Mesh) -> None:
+    """Raise InputError naming the mesh if it cannot be analysed."""
+    name = mesh.name
+    if len(mesh.vertices) == 0 or len(mesh.faces) == 0:
+        raise InputError(f"'{name}' has no faces")
+    if not np.all(np.isfinite(mesh.vertices)):
+        bad = int((~np.isfinite(mesh.vertices)).any(axis=1).sum())
+        raise InputError(f"'{name}' has {bad} vertices with NaN or infinite coordinates")
+    if mesh.faces.min() < 0 or mesh.faces.max() >= len(mesh.vertices):
+        raise InputError(f"'{name}' has faces that index missing vertices")
+    area = face_areas(mesh.vertices, mesh.faces).sum()
+    extent = np.ptp(mesh.vertices, axis=0).max()
+    if not area > 0 or not extent > 0:
+        raise InputError(f"'{name}' is degenerate (zero surface area)")
+
+
+def up_to_z(vertices: np.ndarray, up: str) -> np.ndarray:
+    """Rotate a Y-up asset so that its up axis is +Z (right-handed: (x, y, z) -> (x, -z, y))."""
+    if up == "z":
+        return vertices
+    if up == "y":
+        return np.stack([vertices[:, 0], -vertices[:, 2], vertices[:, 1]], axis=1)
+    raise InputError(f"unknown up axis '{up}' (use 'z' or 'y')")
+
+
+def surface_centroid(vertices: np.ndarray, faces: np.ndarray) -> np.ndarray:
+    """Area-weighted centroid of the surface: robust to uneven tessellation."""
+    areas = face_areas(vertices, faces)
+    centres = vertices[faces].astype(np.float64).mean(axis=1)
+    total = areas.sum()
+    if total <= 0:
+        return vertices.astype(np.float64).mean(axis=0)
+    return (centres * areas[:, None]).sum(axis=0) / total
+
+
+def normalise(mesh: Mesh, up: str = "z") -> Mesh:
+    """Upright (+Z), centred on the surface centroid, scaled into the unit sphere.
+
+    The paper assumes upright but not aligned shapes; real files range over three orders of
+    magnitude in size and sit anywhere in space, so every shape is brought to one frame.
+    Vertices are expected in world space (the adapter applies object transforms first).
+    """
+    validate(mesh)
+    v = up_to_z(mesh.vertices.astype(np.float64), up)
+    c = surface_centroid(v, mesh.faces)
+    v = v - c
+    radius = np.linalg.norm(v, axis=1).max()
+    v = v / radius
+    return Mesh(mesh.name, v.astype(np.float32), mesh.faces, mesh.source, mesh.truth)

@@ -1,0 +1,56 @@
+"""Every tunable number of the method in one place, with the paper's defaults.
+
+Two groups: what changes the drawings (and so the per-shape cache key) and what changes only
+the global analysis. Both are frozen dataclasses so they hash and print cleanly into reports.
+"""
+from __future__ import annotations
+
+from dataclasses import asdict, dataclass, field
+
+
+@dataclass(frozen=True)
+class DrawingSettings:
+    """How each shape is turned into line drawings, seeds and visibility (paper section 3, 4.1)."""
+
+    renderer: str = "freestyle"          # "freestyle" (faithful) or "lineart" (fast)
+    up: str = "z"                        # "z" or "y": the asset's up axis
+    n_views: int = 12                    # cameras every 360/n_views degrees of azimuth
+    elevation_deg: float = 30.0          # cameras look down at the centroid from this angle
+    image_size: int = 200                # square drawings, pixels
+    crease_angle_deg: float = 134.0      # Freestyle dihedral crease threshold (Blender's default)
+    suggestive_contours: bool = False    # paper's choice; off by default (see README for why)
+    n_seeds: int = 30                    # surface seeds per shape
+    seed: int = 0                        # random seed for surface sampling
+
+    def key(self) -> dict:
+        """The fields that change a shape's drawings: part of the cache key."""
+        return asdict(self)
+
+
+@dataclass(frozen=True)
+class AnalysisParams:
+    """The global analysis (paper sections 4.1-4.5) with the paper's parameter values."""
+
+    patch_size: int = 48                 # pixels, square patch around a visible seed
+    n_representatives: int = 50          # k-means centres per view
+    n_clusters: int | None = None        # None: chosen automatically (self-tuning spectral)
+    n_components: int = 20               # K latent factors per view in PSLF
+    eta: float = 0.2                     # Kc / K, the shared proportion of factors
+    lam: float = 20.0                    # lambda, smoothness of the view weights
+    beta: float = 0.05                   # label term weight (eq. 2)
+    gamma: float = 10.0                  # l2,1 penalty on W (eq. 2)
+    mu: float = 0.07                     # reselection threshold (eq. 4)
+    max_rounds: int = 5                  # cluster-and-reselect rounds at most
+    random_state: int = 0
+
+    def as_dict(self) -> dict:
+        return asdict(self)
+
+
+@dataclass(frozen=True)
+class LocalisationParams:
+    """Back-projection of style patches to the surface (paper 4.5 and 5.3)."""
+
+    seed_multiplier: int = 3             # three times as many seeds, as in the decimation application
+    match_threshold: float = 0.6         # HOG similarity a patch must reach to count as a style match
+    extra: dict = field(default_factory=dict)
