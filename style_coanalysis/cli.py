@@ -61,7 +61,7 @@ def build_parser() -> argparse.ArgumentParser:
 def main(argv: list[str] | None = None) -> int:
     args = build_parser().parse_args(argv)
     try:
-        module = importlib.import_module(f"style_coanalysis.blender.cmd_{args.command}")
+        module = importlib.import_module(f".blender.cmd_{args.command}", package=__package__)
         return int(module.run(args) or 0)
     except InputError as exc:
         print(f"error: {exc}", file=sys.stderr)

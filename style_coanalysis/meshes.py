@@ -91,6 +91,21 @@ def surface_centroid(vertices: np.ndarray, faces: np.ndarray) -> np.ndarray:
     return (centres * areas[:, None]).sum(axis=0) / total
 
 
+def normalisation(mesh: Mesh, up: str = "z") -> tuple[np.ndarray, float]:
+    """(centre, radius) of the normalised frame, in the +Z-up frame: normalised = (v' - c) / r."""
+    v = up_to_z(mesh.vertices.astype(np.float64), up)
+    c = surface_centroid(v, mesh.faces)
+    return c, float(np.linalg.norm(v - c, axis=1).max())
+
+
+def to_world(points: np.ndarray, centre: np.ndarray, radius: float, up: str = "z") -> np.ndarray:
+    """Map points (or directions, with centre 0 and radius 1) from the normalised frame back."""
+    p = np.asarray(points, np.float64) * radius + centre
+    if up == "y":  # inverse of up_to_z: (x, y, z) -> (x, z, -y)
+        p = np.stack([p[..., 0], p[..., 2], -p[..., 1]], axis=-1)
+    return p
+
+
 def normalise(mesh: Mesh, up: str = "z") -> Mesh:
     """Upright (+Z), centred on the surface centroid, scaled into the unit sphere.
 
@@ -99,9 +114,6 @@ def normalise(mesh: Mesh, up: str = "z") -> Mesh:
     Vertices are expected in world space (the adapter applies object transforms first).
     """
     validate(mesh)
-    v = up_to_z(mesh.vertices.astype(np.float64), up)
-    c = surface_centroid(v, mesh.faces)
-    v = v - c
-    radius = np.linalg.norm(v, axis=1).max()
-    v = v / radius
+    c, r = normalisation(mesh, up)
+    v = (up_to_z(mesh.vertices.astype(np.float64), up) - c) / r
     return Mesh(mesh.name, v.astype(np.float32), mesh.faces, mesh.source, mesh.truth)
