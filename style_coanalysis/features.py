@@ -1,0 +1,100 @@
+"""HOG features of line drawings (paper 4.1-4.2) on one cell grid shared by views and patches.
+
+Why one grid: a representative patch is used as a convolution filter over a view's HOG map
+(paper 4.2), so the patch descriptor must be made of exactly the same numbers as the map window
+it is compared with. We therefore compute the HOG map of each whole view once
+(`skimage.feature.hog`, 8x8-pixel cells, 2x2-cell blocks, L2-Hys, `feature_vector=False`) and
+*cut* a patch's descriptor out of that map: a 48x48 patch spans 6x6 cells = 5x5 overlapping
+blocks of 2x2x9 values, i.e. a (5, 5, 36) window of the view's (24, 24, 36) block map.
+
+Alignment: a patch centred on an arbitrary pixel is snapped to the nearest cell boundary (its
+top-left pixel, as `patches.window_origins` defines it, is rounded to a multiple of 8), so the
+descriptor describes the window at most 4 pixels from the seed's own window. HOG pools
+gradients over 8x8 cells anyway, so this shift is within the descriptor's own resolution.
+Cutting from the map (rather than running HOG on the 48x48 crop) is also exact at the patch
+border: skimage sets the gradient of an image's outermost pixels to zero, so a crop's outer
+cells differ from the same cells seen inside the view (tests/test_features.py shows the interior
+blocks are identical and only the border blocks differ). `hog_images` still computes HOG of any
+crops with the same settings, for matching patches from elsewhere against filters.
+"""
+from __future__ import annotations
+
+import numpy as np
+from skimage.feature import hog
+
+PIXELS_PER_CELL = 8
+CELLS_PER_BLOCK = 2
+ORIENTATIONS = 9
+CHANNELS = CELLS_PER_BLOCK * CELLS_PER_BLOCK * ORIENTATIONS   # values per block position
+
+
+def hog_images(images: np.ndarray) -> np.ndarray:
+    """HOG block maps of a batch of images (n, H, W) -> (n, by, bx, 36) float32.
+
+    One skimage call per image (about 8 ms for 200x200): the map is per-shape work, cacheable.
+    """
+    images = np.asarray(images, np.float32)
+    if images.ndim == 2:
+        images = images[None]
+    n, h, w = images.shape
+    by = h // PIXELS_PER_CELL - CELLS_PER_BLOCK + 1
+    bx = w // PIXELS_PER_CELL - CELLS_PER_BLOCK + 1
+    out = np.zeros((n, max(by, 0), max(bx, 0), CHANNELS), np.float32)
+    if by <= 0 or bx <= 0:
+        return out
+    for i in range(n):
+        blocks = hog(images[i], orientations=ORIENTATIONS,
+                     pixels_per_cell=(PIXELS_PER_CELL, PIXELS_PER_CELL),
+                     cells_per_block=(CELLS_PER_BLOCK, CELLS_PER_BLOCK),
+                     block_norm="L2-Hys", feature_vector=False)
+        out[i] = blocks.reshape(by, bx, CHANNELS)
+    return out
+
+
+def patch_blocks(size: int) -> int:
+    """Blocks along one side of a patch descriptor: a 48-pixel patch is 6 cells = 5 blocks."""
+    cells = max(CELLS_PER_BLOCK, int(round(size / PIXELS_PER_CELL)))
+    return cells - CELLS_PER_BLOCK + 1
+
+
+def patch_block_origins(pixels: np.ndarray, size: int, map_shape: tuple[int, int]) -> np.ndarray:
+    """(n, 2) integer (block row, block col) where the patch centred on each (x, y) starts.
+
+    The patch's top-left pixel (floor(x) - size//2, as in patches.window_origins) is rounded to
+    the nearest cell and clipped so the window lies inside the map (patches overhanging the image
+    edge are shifted inwards by whole cells).
+    """
+    pixels = np.asarray(pixels, np.float64).reshape(-1, 2)
+    nb = patch_blocks(size)
+    col0 = np.floor(pixels[:, 0]) - size // 2
+    row0 = np.floor(pixels[:, 1]) - size // 2
+    bc = np.rint(col0 / PIXELS_PER_CELL).astype(np.int64)
+    br = np.rint(row0 / PIXELS_PER_CELL).astype(np.int64)
+    br = np.clip(br, 0, max(map_shape[0] - nb, 0))
+    bc = np.clip(bc, 0, max(map_shape[1] - nb, 0))
+    return np.stack([br, bc], axis=1)
+
+
+def cut_windows(maps: np.ndarray, map_index: np.ndarray, origins: np.ndarray, nb: int) -> np.ndarray:
+    """Windows (n, nb, nb, C) cut from `maps` (m, by, bx, C) at `origins` (n, 2) of map `map_index`.
+
+    Pure fancy indexing: one gather for the whole batch.
+    """
+    map_index = np.asarray(map_index, np.int64)
+    origins = np.asarray(origins, np.int64).reshape(-1, 2)
+    off = np.arange(nb)
+    rows = (origins[:, 0, None] + off)[:, :, None]            # (n, nb, 1)
+    cols = (origins[:, 1, None] + off)[:, None, :]            # (n, 1, nb)
+    return maps[map_index[:, None, None], rows, cols]          # (n, nb, nb, C)
+
+
+def patch_descriptors(maps: np.ndarray, map_index: np.ndarray, pixels: np.ndarray,
+                      size: int) -> tuple[np.ndarray, np.ndarray]:
+    """HOG descriptors of patches centred on `pixels`, cut from the views' maps.
+
+    maps: (m, by, bx, C) HOG maps; map_index: (n,) which map each patch lies in; pixels: (n, 2)
+    (x, y) centres. Returns (windows (n, nb, nb, C), block origins (n, 2)).
+    """
+    maps = np.asarray(maps)
+    origins = patch_block_origins(pixels, size, maps.shape[1:3])
+    return cut_windows(maps, map_index, origins, patch_blocks(size)), origins
