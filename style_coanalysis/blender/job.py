@@ -1,0 +1,277 @@
+"""The whole analysis of a set of meshes as one generator of progress steps.
+
+Why a generator: the headless command simply runs it to the end, while the panel's modal
+operator steps it from TIMER events so the interface stays responsive and Esc can stop it
+between steps (`bpy.app.timers` do not fire in background mode, see BLENDER_NOTES). Nothing here
+touches the user's scene: the result is plain data, written back by `writeback` only once the
+whole run has succeeded, so a cancelled or failed run changes nothing.
+
+Long global stages (the analysis) run in a worker thread while the generator keeps yielding
+their progress; they are pure numpy and never touch bpy. Rendering touches bpy, so it runs in
+this thread shape by shape (jobs=1) or in worker processes (jobs>1).
+"""
+from __future__ import annotations
+
+import threading
+import time
+from dataclasses import dataclass, field, replace
+
+import numpy as np
+
+from .. import localisation, metrics
+from ..meshes import InputError, Mesh, normalisation, normalise, to_world, validate
+from ..params import AnalysisParams, DrawingSettings, LocalisationParams
+from ..progress import Cancelled
+from ..rig import Rig
+from . import batch
+
+STAGES = ("render", "analyse", "localise")
+
+
+@dataclass
+class JobOptions:
+    renderer: str = "freestyle"
+    up: str = "z"
+    suggestive_contours: bool = False
+    jobs: int = 0                       # 0: all cores
+    cache_dir: str | None = None
+    seed: int = 0
+    params: AnalysisParams = field(default_factory=AnalysisParams)
+    localisation: LocalisationParams = field(default_factory=LocalisationParams)
+    labels: dict | None = None          # name -> style
+    triplets: list | None = None        # (a, b, c): a closer in style to b than to c
+    n_seeds: int = 30                   # seeds per shape for the analysis (paper 4.1)
+
+    def drawing_settings(self) -> DrawingSettings:
+        # localisation uses three times as many seeds; seeds come in farthest-point order, so the
+        # first n_seeds of them are themselves an evenly spread set for the analysis
+        return DrawingSettings(renderer=self.renderer, up=self.up,
+                               suggestive_contours=self.suggestive_contours,
+                               n_seeds=self.n_seeds * self.localisation.seed_multiplier,
+                               seed=self.seed)
+
+
+@dataclass
+class ShapeOutcome:
+    name: str
+    cluster: int
+    label: str | None
+    label_given: bool
+    confidence: float
+    best_view: int
+    best_view_matrix: list              # 4x4 camera-to-world matrix (Blender camera convention)
+    vertex_weights: np.ndarray          # (N,) float32 in [0, 1], the object's vertex order
+    style_vertex_fraction: float
+
+
+@dataclass
+class JobResult:
+    shapes: list
+    clusters: list                      # dicts: id, size, members, label
+    skipped: list                       # (name, reason)
+    report: dict
+    analysis: object = None             # pipeline.AnalysisResult
+    drawings: list = field(default_factory=list)
+    localisations: list = field(default_factory=list)
+
+
+def check_constraints(names: list[str], labels: dict | None, triplets: list | None,
+                      skipped: dict[str, str]) -> None:
+    """Refuse constraints that name shapes not being analysed, before any work starts."""
+    known = set(names)
+    mentioned = set(labels or ()) | {n for t in (triplets or ()) for n in t}
+    missing = sorted(mentioned - known)
+    if not missing:
+        return
+    why = [f"'{n}' ({skipped[n]})" if n in skipped else f"'{n}'" for n in missing]
+    raise InputError("constraints name shapes that are not in the analysed set: " + ", ".join(why))
+
+
+def camera_matrix(rig: Rig, view: int, centre, radius: float, up: str) -> list:
+    """Camera-to-world 4x4 of a rig view in the user's frame (Blender: looks down -Z, +Y up)."""
+    right, upv, fwd = rig.frames()[view]
+    cols = [to_world(d, 0.0, 1.0, up) for d in (right, upv, -fwd)]
+    loc = to_world(rig.locations()[view], centre, radius, up)
+    m = np.eye(4)
+    for k, c in enumerate(cols):
+        m[:3, k] = c
+    m[:3, 3] = loc
+    return m.tolist()
+
+
+def _in_thread(fn, progress_box: list, cancel_flag: threading.Event):
+    """Run fn() in a thread; yield its latest progress until it ends; return its value."""
+    out: dict = {}
+
+    def work():
+        try:
+            out["value"] = fn()
+        except BaseException as exc:  # re-raised in the generator's thread
+            out["error"] = exc
+
+    t = threading.Thread(target=work, daemon=True)
+    t.start()
+    try:
+        while t.is_alive():
+            t.join(0.1)
+            yield progress_box[0]
+    except GeneratorExit:
+        cancel_flag.set()
+        t.join()
+        raise
+    if "error" in out:
+        raise out["error"]
+    return out["value"]
+
+
+def run_steps(meshes: list[Mesh], options: JobOptions):
+    """Generator: yields (stage, done, total); returns a JobResult. Raises InputError, Cancelled."""
+    t_start = time.perf_counter()
+    timings: dict[str, float] = {}
+    skipped: dict[str, str] = {}
+    good: list[Mesh] = []
+    for m in meshes:
+        try:
+            validate(m)
+            good.append(m)
+        except InputError as exc:
+            skipped[m.name] = str(exc).replace(f"'{m.name}' ", "")
+    check_constraints([m.name for m in good], options.labels, options.triplets, skipped)
+    if len(good) < 2:
+        raise InputError("need at least two analysable meshes, found %d%s" % (
+            len(good), (" (skipped: " + "; ".join(f"'{k}' {v}" for k, v in skipped.items()) + ")")
+            if skipped else ""))
+
+    # 1. drawings (per shape, cached)
+    settings = options.drawing_settings()
+    t0 = time.perf_counter()
+    cancel_flag = threading.Event()
+    box = [("render", 0, len(good))]
+
+    def progress(stage, done, total):
+        box[0] = (stage, done, total)
+
+    if options.jobs == 1:
+        drawings = []
+        for i, m in enumerate(good):
+            yield ("render", i, len(good))
+            d, bad = batch.draw_collection([m], settings, options.cache_dir, jobs=1)
+            drawings += d
+            skipped.update(dict(bad))
+    else:
+        drawings, bad = yield from _in_thread(
+            lambda: batch.draw_collection(good, settings, options.cache_dir, jobs=options.jobs,
+                                          progress=progress, cancel=cancel_flag.is_set),
+            box, cancel_flag)
+        skipped.update(dict(bad))
+    timings["render"] = time.perf_counter() - t0
+    by_name = {d.name: d for d in drawings}
+    good = [m for m in good if m.name in by_name]
+    drawings = [by_name[m.name] for m in good]
+    check_constraints([m.name for m in good], options.labels, options.triplets, skipped)
+    if len(good) < 2:
+        raise InputError("fewer than two meshes could be drawn: " +
+                         "; ".join(f"'{k}' {v}" for k, v in skipped.items()))
+
+    # 2. the analysis, on the first n_seeds seeds of each shape
+    from .. import pipeline
+    t0 = time.perf_counter()
+    analysis_drawings = [seed_subset(d, options.n_seeds) for d in drawings]
+    box[0] = ("analyse", 0, 1)
+    result = yield from _in_thread(
+        lambda: pipeline.analyse(analysis_drawings, options.params, labels=options.labels,
+                                 triplets=options.triplets, progress=progress,
+                                 cancel=cancel_flag.is_set),
+        box, cancel_flag)
+    timings["analyse"] = time.perf_counter() - t0
+    for k, v in (result.timings or {}).items():
+        timings[f"analyse.{k}"] = v
+
+    # 3. style regions and best views, per shape
+    t0 = time.perf_counter()
+    rig = Rig(n_views=settings.n_views, elevation_deg=settings.elevation_deg,
+              image_size=settings.image_size)
+    locs, shapes = [], []
+    for i, (m, d) in enumerate(zip(good, drawings)):
+        yield ("localise", i, len(good))
+        normal = normalise(m, options.up)
+        filters = localisation.cluster_filters(result.style_filters, int(result.clusters[i]))
+        loc = localisation.localise_shape(d, normal.vertices, filters, options.params.patch_size,
+                                          options.localisation.match_threshold, rig.focal_px)
+        locs.append(loc)
+        centre, radius = normalisation(m, options.up)
+        given = bool(result.label_given[i])
+        label = result.predicted[i] if result.predicted is not None else None
+        shapes.append(ShapeOutcome(
+            name=m.name, cluster=int(result.clusters[i]), label=label, label_given=given,
+            confidence=float(result.confidence[i]), best_view=loc.best_view,
+            best_view_matrix=camera_matrix(rig, loc.best_view, centre, radius, options.up),
+            vertex_weights=loc.weights, style_vertex_fraction=float((loc.weights > 0.5).mean())))
+    timings["localise"] = time.perf_counter() - t0
+    timings["total"] = time.perf_counter() - t_start
+
+    clusters = []
+    for c in range(result.n_clusters):
+        members = [s.name for s in shapes if s.cluster == c]
+        label = None
+        if result.predicted is not None and members:
+            names, counts = np.unique([s.label for s in shapes if s.cluster == c], return_counts=True)
+            label = str(names[np.argmax(counts)])
+        clusters.append({"id": c, "size": len(members), "members": members, "label": label})
+    report = build_report(good, shapes, clusters, skipped, options, timings, result, locs)
+    yield ("done", len(good), len(good))
+    return JobResult(shapes, clusters, sorted(skipped.items()), report, result, drawings, locs)
+
+
+def seed_subset(d, n: int):
+    """The same drawings with only the first n seeds (the analysis' share of them)."""
+    return replace(d, seeds=d.seeds[:n], seed_faces=d.seed_faces[:n],
+                   seed_visible=d.seed_visible[:, :n], seed_pixels=d.seed_pixels[:, :n])
+
+
+def build_report(meshes, shapes, clusters, skipped, options, timings, result, locs) -> dict:
+    """report.json's content; scores appear only when the input carries ground truth."""
+    from dataclasses import asdict
+    report = {
+        "parameters": {
+            "drawing": asdict(options.drawing_settings()) | {"n_seeds_analysis": options.n_seeds},
+            "analysis": options.params.as_dict(),
+            "localisation": {"seed_multiplier": options.localisation.seed_multiplier,
+                             "match_threshold": options.localisation.match_threshold},
+            "labels": len(options.labels or {}), "triplets": len(options.triplets or []),
+            "jobs": options.jobs,
+        },
+        "seconds": {k: round(v, 3) for k, v in timings.items()},
+        "shapes": [{"name": s.name, "source": m.source, "cluster": s.cluster, "label": s.label,
+                    "label_given": s.label_given, "confidence": round(s.confidence, 4),
+                    "style_vertex_fraction": round(s.style_vertex_fraction, 4),
+                    "best_view": s.best_view} for s, m in zip(shapes, meshes)],
+        "clusters": clusters,
+        "skipped": [{"name": n, "reason": r} for n, r in sorted(skipped.items())],
+        "rounds": list(result.rounds or []),
+        "n_style_filters": len(result.style_filters),
+    }
+    styles = [m.truth.get("style") for m in meshes]
+    if all(s is not None for s in styles):
+        pred = np.array([s.cluster for s in shapes])
+        report["scores"] = {"style": metrics.score(pred, styles)}
+        cats = [m.truth.get("category") for m in meshes]
+        if all(c is not None for c in cats):
+            report["scores"]["category"] = metrics.score(pred, cats)
+    masks = [m.truth.get("face_mask") for m in meshes]
+    if all(mask is not None for mask in masks):
+        report["scores"]["localisation"] = localisation_scores(meshes, locs, masks)
+    return report
+
+
+def localisation_scores(meshes, locs, masks) -> dict:
+    """Precision / recall / IoU of faces with style weight > 0.5 against the true decorative faces."""
+    tp = fp = fn = 0
+    for m, loc, mask in zip(meshes, locs, masks):
+        pred = localisation.face_weights(loc.weights, m.faces) > 0.5
+        mask = np.asarray(mask, bool)
+        tp += int((pred & mask).sum())
+        fp += int((pred & ~mask).sum())
+        fn += int((~pred & mask).sum())
+    return {"precision": tp / max(tp + fp, 1), "recall": tp / max(tp + fn, 1),
+            "iou": tp / max(tp + fp + fn, 1)}
