@@ -131,10 +131,12 @@ def run_steps(meshes: list[Mesh], options: JobOptions):
     skipped: dict[str, str] = {}
     good: list[Mesh] = []
     for m in meshes:
+        if not np.all(np.isfinite(m.vertices)):
+            validate(m)  # corrupt coordinates: refuse the run, naming the shape
         try:
             validate(m)
             good.append(m)
-        except InputError as exc:
+        except InputError as exc:  # no faces, degenerate: skipped, listed in the report
             skipped[m.name] = str(exc).replace(f"'{m.name}' ", "")
     check_constraints([m.name for m in good], options.labels, options.triplets, skipped)
     if len(good) < 2:
