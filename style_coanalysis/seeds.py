@@ -2,18 +2,24 @@
 
 The paper samples 3D points rather than 2D pixels so that patches cover the surface uniformly
 and can be back-projected later. Plain area-weighted random sampling clumps (some seeds nearly
-coincide, some regions get none), so we draw many area-weighted candidates and keep a
-farthest-point subset of them: every seed lies on the surface, density follows area, and seeds
-keep apart. Deterministic for a given seed.
+coincide, some regions get none), so we draw many area-weighted candidates, start from a
+farthest-point subset (kept apart, but it favours corners and rims), then relax it with a few
+k-means (Lloyd) steps over the candidates and snap each centre to its nearest candidate: every
+seed lies on the surface, density follows area, seeds keep apart without piling onto edges.
+Deterministic for a given seed.
 """
 from __future__ import annotations
 
+import warnings
+
 import numpy as np
+from scipy.cluster.vq import kmeans2
 
 from .meshes import InputError, Mesh, face_areas
 
 CANDIDATES_PER_SEED = 40     # enough candidates that the farthest-point pick is nearly even
 MIN_CANDIDATES = 2000
+LLOYD_STEPS = 10             # relaxation steps: enough to pull seeds off the rims
 
 
 def sample_surface(vertices: np.ndarray, faces: np.ndarray, n: int,
@@ -56,4 +62,22 @@ def sample_seeds(mesh: Mesh, n: int, seed: int = 0) -> tuple[np.ndarray, np.ndar
     m = max(MIN_CANDIDATES, CANDIDATES_PER_SEED * n)
     cand, cand_faces = sample_surface(mesh.vertices, mesh.faces, m, rng)
     pick = farthest_point_order(cand, n, start=int(rng.integers(m)))
-    return cand[pick].astype(np.float32), cand_faces[pick].astype(np.int32)
+    if n < 2:
+        return cand[pick].astype(np.float32), cand_faces[pick].astype(np.int32)
+    # Lloyd steps from the farthest-point start; an emptied cluster is topped up below
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        centres, labels = kmeans2(cand, cand[pick], iter=LLOYD_STEPS, minit="matrix",
+                                  missing="warn", seed=seed)
+    # snap every centre to the nearest candidate of its own cluster (distinct, on the surface)
+    d = np.linalg.norm(cand - centres[labels], axis=1)
+    order = np.lexsort((d, labels))
+    first = order[np.r_[True, labels[order][1:] != labels[order][:-1]]]
+    if len(first) < len(pick):          # a cluster emptied: top up with farthest candidates
+        dist = np.min(np.linalg.norm(cand[:, None] - cand[first][None], axis=2), axis=1)
+        extra = []
+        for _ in range(len(pick) - len(first)):
+            extra.append(int(np.argmax(dist)))
+            dist = np.minimum(dist, np.linalg.norm(cand - cand[extra[-1]], axis=1))
+        first = np.concatenate([first, extra])
+    return cand[first].astype(np.float32), cand_faces[first].astype(np.int32)

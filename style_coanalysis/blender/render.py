@@ -1,0 +1,403 @@
+"""Line drawings of one normalised mesh from the paper's 12 cameras (section 3), plus seeds.
+
+`draw_shape(mesh, settings)` builds a temporary scene (never the user's), renders every view with
+the chosen renderer, tests seed and vertex visibility by ray casting, removes everything it made
+and returns a `ShapeDrawings`:
+
+- "freestyle" (faithful): Cycles on the CPU, 1 sample, only the strokes (a Holdout material
+  override and a transparent film: the PNG's alpha is the ink). Silhouettes, borders, dihedral
+  creases, optionally suggestive contours (paper: DeCarlo et al. + dihedral feature lines).
+- "lineart" (fast): one Grease Pencil Line Art modifier per camera (each with its own custom
+  camera, so one depsgraph evaluation computes every view); the strokes' 3D points are projected
+  with the rig and rasterised as 1-pixel polylines. No render engine; no suggestive contours.
+
+Cameras match `rig.Rig` exactly (location, orientation, horizontal field of view), so the rig's
+matrices describe the Blender renders to within a pixel (tested with `world_to_camera_view`).
+"""
+from __future__ import annotations
+
+import contextlib
+import math
+import os
+import sys
+import tempfile
+
+import bpy
+import numpy as np
+from mathutils import Matrix
+from mathutils.bvhtree import BVHTree
+from skimage import draw, io
+
+from ..drawings import ShapeDrawings
+from ..meshes import InputError, Mesh
+from ..params import DrawingSettings
+from ..rig import Rig, project
+from ..seeds import sample_seeds
+
+PREFIX = "SCA_tmp_"
+VISIBILITY_TOL_PX = 1.0     # depth slack of the visibility test, in pixels' worth at the point
+
+
+def rig_for(settings: DrawingSettings) -> Rig:
+    return Rig(n_views=settings.n_views, elevation_deg=settings.elevation_deg,
+               image_size=settings.image_size)
+
+
+# ---------------------------------------------------------------- quiet C-level output
+@contextlib.contextmanager
+def quiet_fds():
+    """Send the process's C-level stdout/stderr to a temporary file for the block.
+
+    Freestyle prints thousands of "edge appears twice" warnings and the render operator prints
+    "Saved: ..." lines straight to file descriptors 1 and 2, past Python's sys.stdout. Yields the
+    log file so a failure can quote it.
+    """
+    for stream in (sys.stdout, sys.stderr):
+        with contextlib.suppress(Exception):
+            stream.flush()
+    saved = [os.dup(1), os.dup(2)]
+    log = tempfile.TemporaryFile(mode="w+b")
+    try:
+        os.dup2(log.fileno(), 1)
+        os.dup2(log.fileno(), 2)
+        yield log
+    finally:
+        with contextlib.suppress(Exception):
+            sys.stdout.flush()
+            sys.stderr.flush()
+        os.dup2(saved[0], 1)
+        os.dup2(saved[1], 2)
+        os.close(saved[0])
+        os.close(saved[1])
+        log.close()
+
+
+# ---------------------------------------------------------------- temporary scene
+class TempScene:
+    """A scene holding the mesh and the rig's cameras; `close()` removes every datablock made."""
+
+    def __init__(self, mesh: Mesh, rig: Rig):
+        self._made: list = []           # (collection name, datablock name) in creation order
+        self.scene = self._new("scenes", PREFIX + "scene")
+        r = self.scene.render
+        r.resolution_x = r.resolution_y = rig.image_size
+        r.resolution_percentage = 100
+        r.pixel_aspect_x = r.pixel_aspect_y = 1.0
+        self.mesh_object = self._mesh_object(mesh)
+        self.cameras = self._cameras(rig)
+
+    def _new(self, collection: str, name: str, *args):
+        block = getattr(bpy.data, collection).new(name, *args)
+        self._made.append((collection, block.name))
+        return block
+
+    def adopt(self, collection: str, block) -> None:
+        """Record a datablock Blender made as a side effect, so `close()` removes it too."""
+        self._made.append((collection, block.name))
+
+    def _mesh_object(self, mesh: Mesh):
+        me = self._new("meshes", PREFIX + "mesh")
+        n, m = len(mesh.vertices), len(mesh.faces)
+        me.vertices.add(n)
+        me.vertices.foreach_set("co", mesh.vertices.astype(np.float32).ravel())
+        me.loops.add(3 * m)
+        me.loops.foreach_set("vertex_index", mesh.faces.astype(np.int32).ravel())
+        me.polygons.add(m)
+        me.polygons.foreach_set("loop_start", np.arange(0, 3 * m, 3, dtype=np.int32))
+        me.update(calc_edges=True)
+        # Renderers only: validation may drop degenerate faces, which the seeds never see.
+        me.validate(verbose=False)
+        ob = self._new("objects", PREFIX + "shape", me)
+        self.scene.collection.objects.link(ob)
+        return ob
+
+    def _cameras(self, rig: Rig) -> list:
+        cams = []
+        for i, (frame, loc) in enumerate(zip(rig.frames(), rig.locations())):
+            data = self._new("cameras", f"{PREFIX}cam{i:02d}")
+            data.type = "PERSP"
+            data.sensor_fit = "HORIZONTAL"
+            data.angle = rig.fov
+            data.clip_start = 0.01
+            data.clip_end = 100.0
+            ob = self._new("objects", f"{PREFIX}cam{i:02d}", data)
+            # Blender cameras look down their local -Z with +Y up: columns right, up, -forward.
+            m = np.eye(4)
+            m[:3, 0], m[:3, 1], m[:3, 2], m[:3, 3] = frame[0], frame[1], -frame[2], loc
+            ob.matrix_world = Matrix(m.tolist())
+            self.scene.collection.objects.link(ob)
+            cams.append(ob)
+        self.scene.camera = cams[0]
+        return cams
+
+    def close(self) -> None:
+        """Remove objects first (they use the data), then the scene, then the rest."""
+        order = {"objects": 0, "scenes": 1}
+        for collection, name in sorted(reversed(self._made), key=lambda cn: order.get(cn[0], 2)):
+            coll = getattr(bpy.data, collection)
+            block = coll.get(name)
+            if block is not None:
+                coll.remove(block)
+        self._made.clear()
+
+    def __enter__(self):
+        return self
+
+    def __exit__(self, *exc):
+        self.close()
+
+
+# ---------------------------------------------------------------- Freestyle
+def _holdout_material(ts: TempScene):
+    mat = ts._new("materials", PREFIX + "holdout")
+    nt = mat.node_tree
+    nt.nodes.clear()
+    hold = nt.nodes.new("ShaderNodeHoldout")
+    out = nt.nodes.new("ShaderNodeOutputMaterial")
+    nt.links.new(hold.outputs[0], out.inputs["Surface"])
+    return mat
+
+
+def _setup_freestyle(ts: TempScene, settings: DrawingSettings, threads: int) -> None:
+    sc = ts.scene
+    r = sc.render
+    r.engine = "CYCLES"
+    sc.cycles.device = "CPU"
+    sc.cycles.samples = 1
+    sc.cycles.use_denoising = False
+    sc.cycles.use_adaptive_sampling = False
+    if threads > 0:
+        r.threads_mode = "FIXED"
+        r.threads = threads
+    r.film_transparent = True
+    r.use_freestyle = True
+    r.line_thickness_mode = "ABSOLUTE"
+    r.line_thickness = 1.0
+    r.image_settings.file_format = "PNG"
+    r.image_settings.color_mode = "RGBA"
+    r.image_settings.color_depth = "8"
+    sc.view_settings.view_transform = "Standard"
+    vl = sc.view_layers[0]
+    vl.use_freestyle = True
+    vl.material_override = _holdout_material(ts)
+    fs = vl.freestyle_settings
+    fs.mode = "EDITOR"
+    fs.crease_angle = math.radians(settings.crease_angle_deg)
+    fs.use_culling = False
+    fs.use_smoothness = False
+    for old in list(fs.linesets):
+        fs.linesets.remove(old)
+    ls = fs.linesets.new(PREFIX + "lines")
+    if ls.linestyle is not None:                 # made by linesets.new: ours to remove
+        ts.adopt("linestyles", ls.linestyle)
+    else:
+        ls.linestyle = ts._new("linestyles", PREFIX + "style")
+    style = ls.linestyle
+    style.color = (0.0, 0.0, 0.0)
+    style.alpha = 1.0
+    style.thickness = 1.0
+    style.thickness_position = "CENTER"
+    style.chaining = "PLAIN"
+    ls.select_by_visibility = True
+    ls.visibility = "VISIBLE"
+    ls.select_by_edge_types = True
+    ls.select_by_face_marks = False
+    ls.select_by_collection = False
+    ls.select_by_image_border = False
+    for kind in ("silhouette", "border", "crease", "suggestive_contour", "ridge_valley",
+                 "material_boundary", "contour", "external_contour", "edge_mark"):
+        setattr(ls, f"select_{kind}", False)
+    ls.select_silhouette = ls.select_border = ls.select_crease = True
+    ls.select_suggestive_contour = bool(settings.suggestive_contours)
+
+
+def _render_freestyle(ts: TempScene, settings: DrawingSettings, threads: int) -> np.ndarray:
+    _setup_freestyle(ts, settings, threads)
+    sc = ts.scene
+    size = settings.image_size
+    images = np.zeros((len(ts.cameras), size, size), np.float32)
+    with tempfile.TemporaryDirectory(prefix="sca_render_") as tmp:
+        with quiet_fds() as log:
+            for v, cam in enumerate(ts.cameras):
+                sc.camera = cam
+                path = os.path.join(tmp, f"view_{v:02d}.png")
+                sc.render.filepath = path
+                bpy.ops.render.render(write_still=True, scene=sc.name)
+                if not os.path.exists(path):
+                    log.seek(0)
+                    tail = log.read()[-2000:].decode("utf-8", "replace")
+                    raise RuntimeError(f"Freestyle wrote no image for view {v}:\n{tail}")
+                rgba = io.imread(path)
+                images[v] = rgba[..., 3].astype(np.float32) / 255.0
+    return images
+
+
+# ---------------------------------------------------------------- Line Art
+def _setup_lineart(ts: TempScene, settings: DrawingSettings):
+    gp = ts._new("grease_pencils", PREFIX + "lines")
+    mat = ts._new("materials", PREFIX + "gp_ink")
+    bpy.data.materials.create_gpencil_data(mat)
+    gp.materials.append(mat)
+    ob = ts._new("objects", PREFIX + "lines", gp)
+    ts.scene.collection.objects.link(ob)
+    for v, cam in enumerate(ts.cameras):
+        layer = gp.layers.new(f"view_{v:02d}")
+        md = ob.modifiers.new(f"lineart_{v:02d}", "LINEART")
+        md.source_type = "OBJECT"
+        md.source_object = ts.mesh_object
+        md.target_layer = layer.name
+        md.target_material = mat
+        md.use_custom_camera = True          # one modifier per camera: one evaluation, 12 views
+        md.source_camera = cam
+        md.use_cache = False
+        md.use_contour = True
+        md.use_crease = True
+        md.crease_threshold = math.radians(settings.crease_angle_deg)
+        md.use_crease_on_smooth = True
+        md.use_crease_on_sharp = True
+        md.use_intersection = False
+        md.use_material = False
+        md.use_edge_mark = False
+        md.use_loose = False
+        md.smooth_tolerance = 0.0
+        # Line Art nudges stroke points towards the (active) camera; we project the points with
+        # the rig ourselves, so keep them exactly on the surface.
+        md.stroke_depth_offset = 0.0
+        md.use_offset_towards_custom_camera = True
+        md.use_image_boundary_trimming = False
+    return ob
+
+
+def _drawing_polylines(drawing) -> list[np.ndarray]:
+    """3D polylines of one evaluated Grease Pencil drawing (closed ones repeat their start)."""
+    attrs = drawing.attributes
+    pos_attr = attrs.get("position")
+    if pos_attr is None or len(pos_attr.data) == 0:
+        return []
+    pos = np.empty(3 * len(pos_attr.data), np.float32)
+    pos_attr.data.foreach_get("vector", pos)
+    pos = pos.reshape(-1, 3)
+    offsets = np.empty(len(drawing.curve_offsets), np.int32)
+    drawing.curve_offsets.foreach_get("value", offsets)
+    n_curves = len(offsets) - 1
+    cyclic = np.zeros(n_curves, bool)
+    cyc_attr = attrs.get("cyclic")
+    if cyc_attr is not None and len(cyc_attr.data) == n_curves:
+        cyc_attr.data.foreach_get("value", cyclic)
+    lines = []
+    for c in range(n_curves):
+        pts = pos[offsets[c]:offsets[c + 1]]
+        if cyclic[c] and len(pts) > 2:
+            pts = np.vstack([pts, pts[:1]])
+        lines.append(pts)
+    return lines
+
+
+def rasterise_polylines(polylines_px, size: int) -> np.ndarray:
+    """1-pixel binary lines (size, size) float32 through (x, y) pixel polylines."""
+    img = np.zeros((size, size), np.float32)
+    for pts in polylines_px:
+        pts = np.asarray(pts, np.float64)
+        if len(pts) == 0 or not np.all(np.isfinite(pts)):
+            continue
+        ij = np.floor(pts).astype(np.int64)          # (col, row) of the pixel under each point
+        if len(ij) == 1:
+            ij = np.vstack([ij, ij])
+        for (c0, r0), (c1, r1) in zip(ij[:-1], ij[1:]):
+            rr, cc = draw.line(int(r0), int(c0), int(r1), int(c1))
+            ok = (rr >= 0) & (rr < size) & (cc >= 0) & (cc < size)
+            img[rr[ok], cc[ok]] = 1.0
+    return img
+
+
+def _render_lineart(ts: TempScene, settings: DrawingSettings, rig: Rig) -> np.ndarray:
+    ob = _setup_lineart(ts, settings)
+    view_layer = ts.scene.view_layers[0]
+    with quiet_fds():
+        view_layer.update()           # makes the scene's depsgraph and evaluates the modifiers
+    dg = view_layer.depsgraph
+    ev = ob.evaluated_get(dg)
+    layers = {layer.name: layer for layer in ev.data.layers}
+    mats = rig.matrices()
+    size = settings.image_size
+    images = np.zeros((len(ts.cameras), size, size), np.float32)
+    for v in range(len(ts.cameras)):
+        layer = layers.get(f"view_{v:02d}")
+        frame = layer.current_frame() if layer is not None else None
+        if frame is None:
+            continue
+        lines3d = _drawing_polylines(frame.drawing)
+        lines_px = [project(mats[v:v + 1], pts)[0][0] for pts in lines3d]
+        images[v] = rasterise_polylines(lines_px, size)
+    return images
+
+
+# ---------------------------------------------------------------- visibility
+def _bvh(mesh: Mesh) -> BVHTree:
+    return BVHTree.FromPolygons(mesh.vertices.tolist(), mesh.faces.tolist(), all_triangles=True)
+
+
+def ray_visibility(tree: BVHTree, rig: Rig, points: np.ndarray,
+                   own_face=None, faces: np.ndarray | None = None) -> np.ndarray:
+    """(V, N) bool: is each point the first thing each camera's ray to it meets?
+
+    A ray from the camera centre to the point counts it visible when it hits nothing (grazing
+    rays can slip past the point's own edge), hits at least the point's depth minus about one
+    pixel's worth of depth (`VISIBILITY_TOL_PX`; tighter loses points on their own triangles to
+    floating-point error), or hits a triangle the point lies on (`own_face` index per point, or
+    for vertices the triangles in `faces` that use them).
+    """
+    points = np.asarray(points, np.float64).reshape(-1, 3)
+    locs = rig.locations()
+    vis = np.zeros((len(locs), len(points)), bool)
+    if len(points) == 0:
+        return vis
+    for v, loc in enumerate(locs):
+        d = points - loc
+        dist = np.linalg.norm(d, axis=1)
+        dirs = (d / dist[:, None]).tolist()
+        origin = tuple(loc)
+        rc = tree.ray_cast
+        hit_d = np.full(len(points), np.inf)
+        hit_f = np.full(len(points), -1, np.int64)
+        for i, dr in enumerate(dirs):
+            _, _, idx, dh = rc(origin, dr)
+            if idx is not None:
+                hit_d[i], hit_f[i] = dh, idx
+        tol = VISIBILITY_TOL_PX * dist / rig.focal_px
+        ok = hit_d >= dist - tol
+        if own_face is not None:
+            ok |= hit_f == np.asarray(own_face)
+        elif faces is not None:
+            hf = np.where(hit_f >= 0, hit_f, 0)
+            ok |= (hit_f >= 0) & (faces[hf] == np.arange(len(points))[:, None]).any(axis=1)
+        vis[v] = ok
+    return vis
+
+
+# ---------------------------------------------------------------- entry point
+def draw_shape(mesh: Mesh, settings: DrawingSettings, threads: int = 0) -> ShapeDrawings:
+    """Drawings, seeds and visibility of an already normalised mesh (`meshes.normalise`).
+
+    `threads` caps Cycles' render threads (0: Blender's automatic choice); parallel workers
+    pass 1 so that they do not fight over the cores.
+    """
+    if settings.renderer not in ("freestyle", "lineart"):
+        raise InputError(f"unknown renderer '{settings.renderer}' (use 'freestyle' or 'lineart')")
+    if len(mesh.faces) == 0:
+        raise InputError(f"'{mesh.name}' has no faces")
+    rig = rig_for(settings)
+    seeds, seed_faces = sample_seeds(mesh, settings.n_seeds, settings.seed)
+    tree = _bvh(mesh)
+    seed_visible = ray_visibility(tree, rig, seeds, own_face=seed_faces)
+    vertex_visible = ray_visibility(tree, rig, mesh.vertices, faces=mesh.faces)
+    seed_pixels, _ = project(rig.matrices(), seeds)
+    with TempScene(mesh, rig) as ts:
+        if settings.renderer == "freestyle":
+            images = _render_freestyle(ts, settings, threads)
+        else:
+            images = _render_lineart(ts, settings, rig)
+    return ShapeDrawings(
+        name=mesh.name, images=images, cameras=rig.matrices(), seeds=seeds, seed_faces=seed_faces,
+        seed_visible=seed_visible, seed_pixels=seed_pixels.astype(np.float32),
+        vertex_visible=vertex_visible)
