@@ -1,0 +1,141 @@
+"""The per-shape drawing cache: hits, misses on changed geometry, damaged entries recomputed."""
+import numpy as np
+import pytest
+
+from style_coanalysis.cache import DrawingCache, cache_key, default_cache_dir
+from style_coanalysis.drawings import ShapeDrawings
+from style_coanalysis.meshes import Mesh, normalise
+from style_coanalysis.params import DrawingSettings
+
+
+def tetra(name="tet", shift=0.0):
+    v = np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0], [0, 0, 1 + shift]], float)
+    return Mesh(name, v, [[0, 2, 1], [0, 1, 3], [0, 3, 2], [1, 2, 3]])
+
+
+def fake_drawings(mesh, rng):
+    return ShapeDrawings(mesh.name, rng.random((12, 20, 20)).astype(np.float32),
+                         rng.random((12, 3, 4)), rng.random((5, 3)).astype(np.float32),
+                         np.arange(5, dtype=np.int32), rng.random((12, 5)) > 0.5,
+                         rng.random((12, 5, 2)).astype(np.float32),
+                         rng.random((12, len(mesh.vertices))) > 0.5)
+
+
+class Counter:
+    def __init__(self, mesh):
+        self.mesh, self.calls, self.rng = mesh, 0, np.random.default_rng(0)
+
+    def __call__(self):
+        self.calls += 1
+        return fake_drawings(self.mesh, self.rng)
+
+
+def test_second_lookup_hits_and_round_trips(tmp_path):
+    cache, mesh, s = DrawingCache(tmp_path), tetra(), DrawingSettings()
+    compute = Counter(mesh)
+    first, cached = cache.get_or_compute(mesh, s, compute)
+    assert not cached
+    again, cached = cache.get_or_compute(mesh, s, compute)
+    assert cached and compute.calls == 1
+    for k, v in first.to_arrays().items():
+        assert np.array_equal(v, again.to_arrays()[k]), k
+    # same geometry under another name shares the entry and takes the caller's name
+    renamed, cached = cache.get_or_compute(tetra("other"), s, compute)
+    assert cached and renamed.name == "other"
+    assert not list(tmp_path.rglob(".tmp-*"))         # no temporary files left behind
+
+
+def test_moved_vertex_or_other_settings_miss(tmp_path):
+    cache, s = DrawingCache(tmp_path), DrawingSettings()
+    compute = Counter(tetra())
+    cache.get_or_compute(tetra(), s, compute)
+    cache.get_or_compute(tetra(shift=1e-4), s, compute)
+    cache.get_or_compute(tetra(), DrawingSettings(renderer="lineart"), compute)
+    cache.get_or_compute(tetra(), s, compute, version="another")
+    assert compute.calls == 4
+    assert len({cache_key(tetra(), s), cache_key(tetra(shift=1e-4), s),
+                cache_key(tetra(), DrawingSettings(seed=1))}) == 3
+
+
+@pytest.mark.parametrize("damage", ["truncate", "flip", "swap"])
+def test_damaged_entry_is_recomputed(tmp_path, damage):
+    cache, mesh, s = DrawingCache(tmp_path), tetra(), DrawingSettings()
+    compute = Counter(mesh)
+    good, _ = cache.get_or_compute(mesh, s, compute)
+    path = cache.path(cache_key(mesh, s))
+    raw = path.read_bytes()
+    if damage == "truncate":
+        path.write_bytes(raw[: len(raw) // 2])
+    elif damage == "flip":
+        # rewrite one array inside a valid zip: only the checksum can tell
+        with np.load(path) as z:
+            arrays = {k: z[k] for k in z.files}
+        arrays["images"] = arrays["images"].copy()
+        arrays["images"][0, 0, 0] += 0.5
+        np.savez(path, **arrays)
+    else:
+        # another shape's valid entry under this key
+        other = tetra(shift=0.5)
+        cache.get_or_compute(other, s, Counter(other))
+        path.write_bytes(cache.path(cache_key(other, s)).read_bytes())
+    assert cache.load(cache_key(mesh, s)) is None
+    assert not path.exists()                          # the bad entry is gone
+    again, cached = cache.get_or_compute(mesh, s, compute)
+    assert not cached and compute.calls == 2
+    assert cache.load(cache_key(mesh, s)) is not None
+
+
+def test_default_dir_follows_xdg(monkeypatch, tmp_path):
+    monkeypatch.setenv("XDG_CACHE_HOME", str(tmp_path))
+    assert default_cache_dir() == tmp_path / "style_coanalysis"
+    monkeypatch.delenv("XDG_CACHE_HOME")
+    monkeypatch.setenv("HOME", str(tmp_path))
+    assert default_cache_dir() == tmp_path / ".cache" / "style_coanalysis"
+
+
+# ---------------------------------------------------------------- with Blender: draw_collection
+def box(name, sx=1.0):
+    v = np.array([[x * sx, y, z] for x in (0, 1) for y in (0, 1) for z in (0, 1)], float)
+    quads = [(0, 1, 3, 2), (4, 6, 7, 5), (0, 4, 5, 1), (2, 3, 7, 6), (0, 2, 6, 4), (1, 5, 7, 3)]
+    return Mesh(name, v, [t for a, b, c, d in quads for t in ((a, b, c), (a, c, d))])
+
+
+@pytest.mark.blender
+def test_collection_second_run_renders_nothing(tmp_path, monkeypatch):
+    pytest.importorskip("bpy")
+    import bpy
+
+    from style_coanalysis.blender import batch, render
+    bpy.ops.wm.read_factory_settings(use_empty=True)
+    calls = []
+    real = render.draw_shape
+    monkeypatch.setattr(render, "draw_shape", lambda m, s, **kw: calls.append(m.name) or real(m, s, **kw))
+    shapes = [box("a"), box("b", 2.0), Mesh("empty", np.zeros((3, 3)), np.zeros((0, 3)))]
+    s = DrawingSettings(renderer="lineart")
+    events = []
+    first, skipped = batch.draw_collection(shapes, s, cache_dir=tmp_path, jobs=1,
+                                           progress=lambda *e: events.append(e))
+    assert [d.name for d in first] == ["a", "b"] and calls == ["a", "b"]
+    assert skipped == [("empty", "'empty' has no faces")]
+    assert ("render", 2, 2) in events
+    second, _ = batch.draw_collection(shapes, s, cache_dir=tmp_path, jobs=1)
+    assert calls == ["a", "b"]                        # nothing rendered the second time
+    assert np.array_equal(first[1].images, second[1].images)
+    with pytest.raises(batch.Cancelled):
+        batch.draw_collection(shapes, DrawingSettings(renderer="lineart", seed=9),
+                              cache_dir=tmp_path, jobs=1, cancel=lambda: True)
+
+
+@pytest.mark.blender
+@pytest.mark.slow
+def test_collection_in_worker_processes_matches_in_process(tmp_path):
+    pytest.importorskip("bpy")
+    from style_coanalysis.blender import batch
+    shapes = [box("a"), box("b", 1.5)]
+    s = DrawingSettings(renderer="lineart")
+    par, skipped = batch.draw_collection(shapes, s, cache_dir=False, jobs=2)
+    seq, _ = batch.draw_collection(shapes, s, cache_dir=False, jobs=1)
+    assert not skipped and [d.name for d in par] == ["a", "b"]
+    for p, q in zip(par, seq):
+        assert np.array_equal(p.images, q.images) and np.array_equal(p.seed_visible, q.seed_visible)
+    assert normalise(shapes[0]).vertices.shape[0] == par[0].vertex_visible.shape[1]
