@@ -1,12 +1,18 @@
-"""Blender operators: thin wrappers that read the scene, call the pipeline, write results back."""
+"""Blender operators: thin wrappers that read the scene, call the pipeline, write results back.
+
+Registration also owns the stored properties (`style_coanalysis.blender.properties`): they are
+registered first because the operators and panels read them, and unregistered last.
+"""
 import bpy
 
-from . import analyse
+from ..style_coanalysis.blender import properties
+from . import analyse, constraints, decimation, results
 
-_modules = (analyse,)
+_modules = (analyse, constraints, results, decimation)
 
 
 def register():
+    properties.register()
     for m in _modules:
         for cls in m.CLASSES:
             bpy.utils.register_class(cls)
@@ -16,3 +22,4 @@ def unregister():
     for m in reversed(_modules):
         for cls in reversed(m.CLASSES):
             bpy.utils.unregister_class(cls)
+    properties.unregister()

@@ -1,24 +1,244 @@
-"""The Analyse operator (placeholder until the panel issue lands)."""
+"""The Analyse operator: run the headless job over the target meshes and write the result back.
+
+In the UI the job (a generator of progress steps, `style_coanalysis.blender.job.run_steps`) is
+stepped by TIMER events, so Blender stays responsive, shows progress, and Esc cancels. In background
+mode timers never fire, so `execute` runs the generator to its end. Either way the scene is written
+only once, at the end: a cancelled or failed run leaves it as it was, and a finished run is a single
+undo step. Objects are kept by name between steps, never as `bpy_struct`s.
+"""
+import time
+import traceback
+
 import bpy
+
+from ..style_coanalysis.blender import properties, writeback
+from ..style_coanalysis.meshes import InputError
+from ..style_coanalysis.params import AnalysisParams
+
+STEP_BUDGET_S = 0.1     # time spent in the generator per TIMER event before yielding to the UI
+
+
+def target_names(context) -> list:
+    """Names of the mesh objects to analyse (selected, or a collection's), sorted for determinism."""
+    settings = context.scene.style_coanalysis
+    if settings.target == "COLLECTION":
+        col = settings.target_collection
+        if col is None:
+            return []
+        in_scene = context.scene.objects
+        objs = [o for o in col.all_objects if o.type == "MESH" and o.name in in_scene]
+    else:
+        objs = [o for o in context.selected_objects if o.type == "MESH"]
+    return sorted(o.name for o in objs)
+
+
+def _renderer(context) -> str:
+    settings = context.scene.style_coanalysis
+    if settings.renderer != "PREFERENCES":
+        return settings.renderer
+    prefs = properties.preferences(context)
+    return prefs.renderer if prefs else "freestyle"
+
+
+def _jobs(context) -> int:
+    prefs = properties.preferences(context)
+    return prefs.jobs if prefs else 1
+
+
+def build_job(context):
+    """(meshes, options, warnings) for the current settings. Raises InputError naming the problem
+    when fewer than two shapes can be analysed. Reads the scene, changes nothing."""
+    from ..style_coanalysis.blender import job, scene as bscene  # heavy: only when running
+
+    settings = context.scene.style_coanalysis
+    names = target_names(context)
+    depsgraph = context.evaluated_depsgraph_get()
+    meshes, warnings = [], []
+    for name in names:
+        obj = context.scene.objects[name]
+        try:
+            mesh = bscene.mesh_from_object(obj, depsgraph)
+        except (InputError, ValueError) as exc:
+            warnings.append(f"'{name}' skipped: {exc}")
+            continue
+        if len(mesh.vertices) != len(obj.data.vertices):
+            # The weights must line up with the object's own vertices to be written back.
+            warnings.append(f"'{name}' skipped: its modifiers change the vertex count "
+                            "(apply them first)")
+            continue
+        meshes.append(mesh)
+    if len(meshes) < 2:
+        detail = f" ({'; '.join(warnings)})" if warnings else ""
+        raise InputError(f"Need at least two mesh objects to analyse, got {len(meshes)}{detail}")
+
+    kept = {m.name for m in meshes}
+    known = set(settings.label_names())
+    labels = {}
+    for name in sorted(kept):
+        label = context.scene.objects[name].style_coanalysis.label
+        if label and label in known:
+            labels[name] = label
+    triplets = []
+    for i, t in enumerate(settings.triplets):
+        abc = t.names()
+        if abc is None:
+            warnings.append(f"Triplet {i + 1} ignored: one of its objects was deleted")
+        elif not set(abc) <= kept:
+            warnings.append(f"Triplet {i + 1} ignored: {', '.join(abc)} are not all analysed")
+        else:
+            triplets.append(abc)
+
+    n_clusters = None if settings.auto_clusters else settings.n_clusters
+    params = AnalysisParams(
+        n_representatives=settings.n_representatives, n_clusters=n_clusters, eta=settings.eta,
+        lam=settings.lam, beta=settings.beta, gamma=settings.gamma, mu=settings.mu,
+        max_rounds=settings.max_rounds, random_state=settings.seed)
+    options = job.JobOptions(
+        renderer=_renderer(context), up=settings.up, jobs=_jobs(context),
+        cache_dir=properties.cache_dir(context), seed=settings.seed, params=params,
+        labels=labels or None, triplets=triplets or None)
+    return meshes, options, warnings, job
 
 
 class STYLE_OT_analyse(bpy.types.Operator):
-    """Analyse the selected meshes for shared decorative style"""
+    """Cluster the target meshes by decorative style and mark their style regions"""
 
     bl_idname = "style.analyse"
     bl_label = "Analyse Style"
-    bl_options = {"REGISTER"}
+    bl_options = {"REGISTER", "UNDO"}
+
+    _running = False    # one analysis at a time (class-wide: there is one window manager)
 
     @classmethod
     def poll(cls, context):
-        if not any(o.type == "MESH" for o in context.selected_objects):
-            cls.poll_message_set("Select at least two mesh objects")
+        if cls._running:
+            cls.poll_message_set("An analysis is already running (Esc cancels it)")
+            return False
+        if context.mode != "OBJECT":
+            cls.poll_message_set("Switch to Object Mode to analyse")
+            return False
+        settings = context.scene.style_coanalysis
+        if settings.target == "COLLECTION" and settings.target_collection is None:
+            cls.poll_message_set("Choose the collection to analyse")
+            return False
+        if len(target_names(context)) < 2:
+            where = ("in the collection" if settings.target == "COLLECTION" else "selected")
+            cls.poll_message_set(f"Need at least two mesh objects {where}")
             return False
         return True
 
+    # -- shared start / finish
+
+    def _start(self, context):
+        try:
+            meshes, options, warnings, job = build_job(context)
+        except InputError as exc:
+            self.report({"ERROR"}, str(exc))
+            return False
+        for w in warnings:
+            self.report({"WARNING"}, w)
+        self._gen = job.run_steps(meshes, options)
+        self._names = [m.name for m in meshes]
+        return True
+
+    def _fail(self, exc):
+        if isinstance(exc, InputError):
+            self.report({"ERROR"}, str(exc))
+        else:
+            traceback.print_exc()
+            self.report({"ERROR"}, f"Analysis failed: {type(exc).__name__}: {exc}")
+
+    def _finish(self, context, result):
+        try:
+            summary = writeback.write_results(context.scene, result)
+        except writeback.WritebackError as exc:
+            self.report({"ERROR"}, f"Results not written: {exc}")
+            return {"CANCELLED"}
+        for name, reason in result.skipped:
+            self.report({"WARNING"}, f"'{name}' skipped: {reason}")
+        if summary["shared_meshes"]:
+            self.report({"INFO"}, "Meshes shared by several objects got their mean weights: "
+                        + ", ".join(summary["shared_meshes"]))
+        self.report({"INFO"}, f"{summary['objects']} shapes in {summary['clusters']} style "
+                              "clusters")
+        return {"FINISHED"}
+
+    # -- background / redo: synchronous
+
     def execute(self, context):
-        self.report({"ERROR"}, "Analysis is not available yet")
-        return {"CANCELLED"}
+        if not self._start(context):
+            return {"CANCELLED"}
+        try:
+            while True:
+                next(self._gen)
+        except StopIteration as stop:
+            return self._finish(context, stop.value)
+        except Exception as exc:  # noqa: BLE001 - reported to the person, scene untouched
+            self._fail(exc)
+            return {"CANCELLED"}
+        finally:
+            self._gen = None
+
+    # -- interactive: stepped by timer events
+
+    def invoke(self, context, event):
+        if bpy.app.background or context.window is None:
+            return self.execute(context)
+        if not self._start(context):
+            return {"CANCELLED"}
+        wm = context.window_manager
+        self._timer = wm.event_timer_add(0.05, window=context.window)
+        wm.modal_handler_add(self)
+        wm.progress_begin(0, 1000)
+        type(self)._running = True
+        context.workspace.status_text_set("Style analysis starting (Esc to cancel)")
+        return {"RUNNING_MODAL"}
+
+    def _cleanup(self, context):
+        wm = context.window_manager
+        if getattr(self, "_timer", None) is not None:
+            wm.event_timer_remove(self._timer)
+            self._timer = None
+        wm.progress_end()
+        if context.workspace is not None:
+            context.workspace.status_text_set(None)
+        gen, self._gen = getattr(self, "_gen", None), None
+        if gen is not None:
+            gen.close()         # lets the job release its workers and files
+        type(self)._running = False
+
+    def modal(self, context, event):
+        if event.type == "ESC":
+            self._cleanup(context)
+            self.report({"WARNING"}, "Style analysis cancelled: the scene is unchanged")
+            return {"CANCELLED"}
+        if event.type != "TIMER" or event.window_manager_timer != self._timer:
+            if event.type in {"MIDDLEMOUSE", "WHEELUPMOUSE", "WHEELDOWNMOUSE", "TRACKPADPAN",
+                              "TRACKPADZOOM", "MOUSEMOVE"}:
+                return {"PASS_THROUGH"}     # let the view be navigated while it runs
+            return {"RUNNING_MODAL"}        # but no edits: the result must still fit the scene
+        deadline = time.monotonic() + STEP_BUDGET_S
+        try:
+            while time.monotonic() < deadline:
+                stage, done, total = next(self._gen)
+                frac = done / total if total else 0.0
+                context.window_manager.progress_update(int(1000 * frac))
+                context.workspace.status_text_set(
+                    f"Style analysis: {stage} {done}/{total} (Esc to cancel)")
+        except StopIteration as stop:
+            self._gen = None
+            self._cleanup(context)
+            return self._finish(context, stop.value)
+        except Exception as exc:  # noqa: BLE001
+            self._gen = None
+            self._cleanup(context)
+            self._fail(exc)
+            return {"CANCELLED"}
+        return {"RUNNING_MODAL"}
+
+    def cancel(self, context):
+        """Blender aborts the modal (file load, window closed): stop without writing."""
+        self._cleanup(context)
 
 
 CLASSES = (STYLE_OT_analyse,)

@@ -1,0 +1,143 @@
+"""Style-preserving decimation with Blender's own Decimate modifier (COLLAPSE), paper section 5.3.
+
+Decimate scales an edge's collapse cost by the vertex group weight, and never collapses an edge
+touching a vertex of group weight exactly 0 (low weight = protected). Our `style_weight` group is
+1 on style regions, so the style-preserving modifier sets `invert_vertex_group=True`: vertices of
+style weight 1 are never collapsed, intermediate weights cost more to collapse (scaled by
+`strength` = `vertex_group_factor`), weight 0 is decimated as usual. Because protected triangles
+stay, the requested ratio may be out of reach: every function reports the count actually reached.
+
+One decimation per object at a time: adding the style-preserving modifier removes the plain one
+and vice versa (stacking both would decimate twice). Compare the two on duplicates, or one after
+the other as `match_plain_to` and the bench do.
+
+A triangle is "style" when the mean style weight of its three vertices is > 0.5 (the same rule as
+the highlight material). After decimation the weights are read from the evaluated mesh, which keeps
+the vertex group on the surviving vertices.
+"""
+from __future__ import annotations
+
+import bpy
+import numpy as np
+
+from .writeback import GROUP, THRESHOLD, vertex_weights
+
+STYLE_MODIFIER = "Style Decimate"
+PLAIN_MODIFIER = "Plain Decimate"
+
+
+def triangle_counts(obj, mesh=None, group: str = GROUP) -> tuple[int, int]:
+    """(all triangles, style triangles) of `mesh` (default: the object's own, unevaluated mesh)."""
+    mesh = mesh if mesh is not None else obj.data
+    mesh.calc_loop_triangles()
+    n = len(mesh.loop_triangles)
+    if n == 0:
+        return 0, 0
+    tris = np.empty(n * 3, dtype=np.int32)
+    mesh.loop_triangles.foreach_get("vertices", tris)
+    weights = vertex_weights(obj, mesh, group)
+    style = weights[tris.reshape(-1, 3)].mean(axis=1) > THRESHOLD
+    return n, int(style.sum())
+
+
+def evaluated_counts(obj, depsgraph=None) -> tuple[int, int]:
+    """Triangle counts after the object's modifier stack."""
+    depsgraph = depsgraph or bpy.context.evaluated_depsgraph_get()
+    depsgraph.update()
+    obj_eval = obj.evaluated_get(depsgraph)
+    mesh = obj_eval.to_mesh()
+    try:
+        return triangle_counts(obj, mesh)
+    finally:
+        obj_eval.to_mesh_clear()
+
+
+def remove_decimate(obj) -> None:
+    """Remove the decimate modifiers this module added (either kind)."""
+    for name in (STYLE_MODIFIER, PLAIN_MODIFIER):
+        mod = obj.modifiers.get(name)
+        if mod is not None:
+            obj.modifiers.remove(mod)
+
+
+def _set_modifier(obj, ratio, strength, style_preserving):
+    name, other = ((STYLE_MODIFIER, PLAIN_MODIFIER) if style_preserving
+                   else (PLAIN_MODIFIER, STYLE_MODIFIER))
+    if obj.modifiers.get(other) is not None:
+        obj.modifiers.remove(obj.modifiers[other])
+    mod = obj.modifiers.get(name) or obj.modifiers.new(name, "DECIMATE")
+    mod.decimate_type = "COLLAPSE"
+    mod.ratio = float(ratio)
+    if style_preserving:
+        mod.vertex_group = GROUP
+        mod.invert_vertex_group = True
+        mod.vertex_group_factor = float(strength)
+    else:
+        mod.vertex_group = ""
+        mod.invert_vertex_group = False
+    return mod
+
+
+def _apply(obj, mod_name):
+    """Apply one modifier (only ours, not the rest of the stack); shared meshes become single
+    user so the other objects keep their geometry."""
+    with bpy.context.temp_override(object=obj, active_object=obj, selected_objects=[obj]):
+        bpy.ops.object.modifier_apply(modifier=mod_name, single_user=True)
+
+
+def add_decimate(obj, ratio: float, strength: float = 1.0, style_preserving: bool = True,
+                 apply: bool = False, depsgraph=None) -> dict:
+    """Add (or update) a COLLAPSE Decimate modifier on `obj` and report what it reached.
+
+    style_preserving=True drives the modifier with the `style_weight` group (inverted, factor =
+    strength); False is the plain twin for comparison. Returns triangle counts before/after,
+    overall and inside style regions, and the requested target. With apply=True the modifier is
+    applied to the mesh.
+    """
+    if obj is None or obj.type != "MESH":
+        raise ValueError(f"'{getattr(obj, 'name', obj)}' is not a mesh object")
+    if style_preserving and obj.vertex_groups.get(GROUP) is None:
+        raise ValueError(f"'{obj.name}' has no '{GROUP}' vertex group: analyse it first")
+    before, style_before = triangle_counts(obj)
+    mod = _set_modifier(obj, ratio, strength, style_preserving)
+    after, style_after = evaluated_counts(obj, depsgraph)
+    name = mod.name
+    if apply:
+        _apply(obj, name)
+    return {
+        "object": obj.name, "modifier": name, "style_preserving": style_preserving,
+        "ratio": float(ratio), "strength": float(strength) if style_preserving else 0.0,
+        "requested_triangles": int(round(ratio * before)),
+        "triangles_before": before, "style_triangles_before": style_before,
+        "triangles": after, "style_triangles": style_after, "applied": bool(apply),
+    }
+
+
+def match_plain_to(obj, target_triangles: int, apply: bool = False, depsgraph=None,
+                   max_steps: int = 24) -> dict:
+    """Plain decimation of `obj` tuned (bisection on ratio) to reach `target_triangles`, e.g. the
+    count the style-preserving modifier reached, for a comparison at equal triangle budget."""
+    before, _ = triangle_counts(obj)
+    if before == 0:
+        raise ValueError(f"'{obj.name}' has no faces")
+    lo, hi = 0.0, 1.0
+    ratio = min(1.0, max(0.0, target_triangles / before))
+    best = None
+    for _ in range(max_steps):
+        res = add_decimate(obj, ratio, style_preserving=False, depsgraph=depsgraph)
+        gap = res["triangles"] - target_triangles
+        if best is None or abs(gap) < abs(best["triangles"] - target_triangles):
+            best = res
+        if gap == 0:
+            break
+        if gap > 0:
+            hi = ratio
+        else:
+            lo = ratio
+        ratio = 0.5 * (lo + hi)
+        if hi - lo < 1e-7:
+            break
+    res = add_decimate(obj, best["ratio"], style_preserving=False, apply=apply,
+                       depsgraph=depsgraph)
+    res["target_triangles"] = int(target_triangles)
+    return res

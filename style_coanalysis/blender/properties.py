@@ -1,0 +1,234 @@
+"""Everything the add-on stores in a .blend file, plus its preferences.
+
+Stored in the file (so it survives save, reload and undo):
+- `Scene.style_coanalysis` (`StyleSettings`): the style labels (name, colour), the triplet
+  constraints, the analysis settings and the last run's clusters.
+- `Object.style_coanalysis` (`StyleObjectSettings`): the label a person assigned to the object.
+
+The analysis results on objects (cluster, predicted label, confidence, best view) are plain custom
+properties written by `writeback.py`, so they are readable without the add-on installed.
+
+Objects are referenced by PointerProperty (triplets) or by name (label assignment is on the object
+itself), never held in Python variables: undo frees `bpy_struct`s.
+"""
+from __future__ import annotations
+
+import os
+
+import bpy
+from bpy.props import (BoolProperty, CollectionProperty, EnumProperty, FloatProperty,
+                       FloatVectorProperty, IntProperty, PointerProperty, StringProperty)
+
+# The extension's root package ("bl_ext.<repo>.<id>" when installed): AddonPreferences are looked up
+# under it. This module is <root>.style_coanalysis.blender.properties.
+ROOT_PACKAGE = __package__.rsplit(".", 2)[0]
+
+RENDERERS = (
+    ("freestyle", "Freestyle", "Faithful line drawings (Cycles + Freestyle, slower)"),
+    ("lineart", "Line Art", "Fast line drawings (Grease Pencil Line Art, no suggestive contours)"),
+)
+
+# The paper's parameter values (also AnalysisParams' defaults); one place for the UI.
+PAPER_DEFAULTS = dict(n_representatives=50, eta=0.2, lam=20.0, beta=0.05, gamma=10.0, mu=0.07,
+                      max_rounds=5)
+
+
+def default_cache_dir() -> str:
+    """The drawing cache folder used when the preference is empty.
+
+    Installed as an extension: the extension's user folder (kept across upgrades, unlike the
+    extension folder itself). Imported directly (tests, the command line): the user cache folder.
+    Resolved when needed rather than at import so that importing never creates folders.
+    """
+    try:
+        base = bpy.utils.extension_path_user(ROOT_PACKAGE, path="", create=True)
+        return os.path.join(base, "cache")
+    except (ValueError, RuntimeError, TypeError):
+        root = os.environ.get("XDG_CACHE_HOME") or os.path.join(os.path.expanduser("~"), ".cache")
+        return os.path.join(root, "style_coanalysis")
+
+
+def preferences(context=None):
+    """The add-on preferences, or None when the package is not registered as an add-on."""
+    context = context or bpy.context
+    addon = context.preferences.addons.get(ROOT_PACKAGE)
+    return addon.preferences if addon else None
+
+
+def cache_dir(context=None) -> str:
+    prefs = preferences(context)
+    path = prefs.cache_dir if prefs and prefs.cache_dir else default_cache_dir()
+    return bpy.path.abspath(path)
+
+
+class StylePreferences(bpy.types.AddonPreferences):
+    """Machine-level settings: they belong to the user, not to a .blend file."""
+
+    bl_idname = ROOT_PACKAGE
+
+    cache_dir: StringProperty(
+        name="Cache Folder", subtype="DIR_PATH", default="",
+        description="Where line drawings are cached between runs (empty: the extension's user folder)")
+    renderer: EnumProperty(name="Default Renderer", items=RENDERERS, default="freestyle",
+                           description="Line renderer used when a scene asks for the default")
+    jobs: IntProperty(name="Jobs", default=1, min=0, max=64,
+                      description="Parallel processes for per-shape rendering (0: all cores)")
+
+    def draw(self, context):
+        col = self.layout.column()
+        col.prop(self, "cache_dir")
+        if not self.cache_dir:
+            col.label(text=f"Default: {default_cache_dir()}", icon="INFO")
+        col.prop(self, "renderer")
+        col.prop(self, "jobs")
+
+
+def _unique_label_name(labels, wanted: str, skip) -> str:
+    names = {lab.name for lab in labels if lab.as_pointer() != skip.as_pointer()}
+    if wanted not in names:
+        return wanted
+    i = 1
+    while f"{wanted}.{i:03d}" in names:
+        i += 1
+    return f"{wanted}.{i:03d}"
+
+
+def _label_name_changed(self, context):
+    """Renaming a label in the list renames it on every object that carries it (labels are
+    assigned by name). `stored_name` remembers the previous name; names stay unique."""
+    if self.name == self.stored_name:
+        return
+    scene = self.id_data
+    old = self.stored_name
+    new = _unique_label_name(scene.style_coanalysis.labels, self.name or "Style", self)
+    # Writing self.name re-enters this callback; stored_name is updated first so it returns early.
+    self.stored_name = new
+    if self.name != new:
+        self.name = new
+    if old:
+        for obj in bpy.data.objects:
+            ob_settings = getattr(obj, "style_coanalysis", None)
+            if ob_settings is not None and ob_settings.label == old:
+                ob_settings.label = new
+
+
+class StyleLabel(bpy.types.PropertyGroup):
+    """A style class a person can assign to shapes (semi-supervised analysis)."""
+
+    name: StringProperty(name="Name", default="Style", update=_label_name_changed)
+    stored_name: StringProperty(options={"HIDDEN"})
+    color: FloatVectorProperty(name="Colour", subtype="COLOR", size=4, min=0.0, max=1.0,
+                               default=(0.8, 0.5, 0.1, 1.0))
+
+
+def _is_mesh(self, obj):
+    return obj.type == "MESH"
+
+
+class StyleTriplet(bpy.types.PropertyGroup):
+    """"A is closer in style to B than to C". Pointers, not names: renaming keeps the constraint."""
+
+    a: PointerProperty(name="A", type=bpy.types.Object, poll=_is_mesh)
+    b: PointerProperty(name="B", type=bpy.types.Object, poll=_is_mesh)
+    c: PointerProperty(name="C", type=bpy.types.Object, poll=_is_mesh)
+
+    def names(self):
+        """(a, b, c) object names, or None when an object was deleted."""
+        if self.a is None or self.b is None or self.c is None:
+            return None
+        return (self.a.name, self.b.name, self.c.name)
+
+
+class StyleCluster(bpy.types.PropertyGroup):
+    """One style cluster of the last run (members carry `style_cluster` = cluster_id)."""
+
+    cluster_id: IntProperty(name="Cluster")
+    size: IntProperty(name="Size")
+    label: StringProperty(name="Label", description="Label given to most labelled members, if any")
+
+
+class StyleSettings(bpy.types.PropertyGroup):
+    """Per-scene constraints, settings and last results."""
+
+    labels: CollectionProperty(type=StyleLabel)
+    active_label_index: IntProperty(name="Active Label", default=0)
+    triplets: CollectionProperty(type=StyleTriplet)
+    active_triplet_index: IntProperty(name="Active Triplet", default=0)
+    clusters: CollectionProperty(type=StyleCluster)
+    active_cluster_index: IntProperty(name="Active Cluster", default=0)
+    last_report: StringProperty(name="Last Run", default="")
+
+    # Triplet being composed in the panel.
+    triplet_a: PointerProperty(name="A", type=bpy.types.Object, poll=_is_mesh,
+                               description="The shape the constraint is about")
+    triplet_b: PointerProperty(name="B", type=bpy.types.Object, poll=_is_mesh,
+                               description="A shape closer in style to A")
+    triplet_c: PointerProperty(name="C", type=bpy.types.Object, poll=_is_mesh,
+                               description="A shape less close in style to A")
+
+    # What and how to analyse.
+    target: EnumProperty(name="Target", default="SELECTED", items=(
+        ("SELECTED", "Selected", "The selected mesh objects"),
+        ("COLLECTION", "Collection", "The mesh objects of a collection (and its children)")))
+    target_collection: PointerProperty(name="Collection", type=bpy.types.Collection)
+    renderer: EnumProperty(name="Renderer", default="PREFERENCES", items=(
+        ("PREFERENCES", "Default", "The renderer chosen in the add-on preferences"),) + RENDERERS)
+    up: EnumProperty(name="Up Axis", default="z", items=(("z", "Z", "Z up"), ("y", "Y", "Y up")))
+    auto_clusters: BoolProperty(name="Automatic", default=True,
+                                description="Choose the number of style clusters automatically")
+    n_clusters: IntProperty(name="Clusters", default=2, min=1, max=100)
+    seed: IntProperty(name="Seed", default=0, min=0)
+
+    # Paper parameters (Advanced).
+    n_representatives: IntProperty(name="Representatives", min=2, max=1000,
+                                   default=PAPER_DEFAULTS["n_representatives"],
+                                   description="k-means patch representatives per view (paper: 50)")
+    eta: FloatProperty(name="Eta", min=0.0, max=1.0, default=PAPER_DEFAULTS["eta"],
+                       description="Shared proportion of latent factors Kc/K (paper: 0.2)")
+    lam: FloatProperty(name="Lambda", min=0.0, default=PAPER_DEFAULTS["lam"],
+                       description="Smoothness of the view weights (paper: 20)")
+    beta: FloatProperty(name="Beta", min=0.0, default=PAPER_DEFAULTS["beta"], precision=3,
+                        description="Weight of the label term (paper: about 0.05)")
+    gamma: FloatProperty(name="Gamma", min=0.0, default=PAPER_DEFAULTS["gamma"],
+                         description="l2,1 penalty on W (paper: about 10)")
+    mu: FloatProperty(name="Mu", min=0.0, max=1.0, default=PAPER_DEFAULTS["mu"], precision=3,
+                      description="Patch reselection threshold (paper: 0.07)")
+    max_rounds: IntProperty(name="Rounds", min=1, max=50, default=PAPER_DEFAULTS["max_rounds"],
+                            description="Cluster-and-reselect rounds at most (paper: until stable)")
+
+    # Decimation.
+    decimate_ratio: FloatProperty(name="Ratio", min=0.0, max=1.0, default=0.3, subtype="FACTOR",
+                                  description="Fraction of triangles to keep (0.3: 70% reduction)")
+    decimate_strength: FloatProperty(name="Strength", min=0.0, max=1000.0, soft_max=10.0,
+                                     default=1.0,
+                                     description="How strongly style weights raise collapse cost "
+                                                 "(vertices of weight 1 are never collapsed)")
+    decimate_apply: BoolProperty(name="Apply", default=False,
+                                 description="Apply the modifier to the mesh instead of keeping it")
+
+    def label_names(self):
+        return [lab.name for lab in self.labels]
+
+
+class StyleObjectSettings(bpy.types.PropertyGroup):
+    """The label a person gave this object (by name; empty: unlabelled)."""
+
+    label: StringProperty(name="Style Label", default="")
+
+
+CLASSES = (StylePreferences, StyleLabel, StyleTriplet, StyleCluster, StyleSettings,
+           StyleObjectSettings)
+
+
+def register():
+    for cls in CLASSES:
+        bpy.utils.register_class(cls)
+    bpy.types.Scene.style_coanalysis = PointerProperty(type=StyleSettings)
+    bpy.types.Object.style_coanalysis = PointerProperty(type=StyleObjectSettings)
+
+
+def unregister():
+    del bpy.types.Object.style_coanalysis
+    del bpy.types.Scene.style_coanalysis
+    for cls in reversed(CLASSES):
+        bpy.utils.unregister_class(cls)

@@ -1,0 +1,194 @@
+"""The Analyse operator and the results operators, with the job's generator replaced by a quick
+stand-in (the real analysis is exercised by the job's own tests): what the operator hands to the
+job, that it writes back once at the end, and that a failed run leaves the scene as it was."""
+import importlib.util
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+bpy = pytest.importorskip("bpy")
+pytestmark = pytest.mark.blender
+
+ROOT = Path(__file__).resolve().parent.parent
+PKG = "style_coanalysis_ext"
+
+
+def load_extension():
+    """The repo root imported as a package (as Blender would, under another name)."""
+    if PKG not in sys.modules:
+        spec = importlib.util.spec_from_file_location(
+            PKG, ROOT / "__init__.py", submodule_search_locations=[str(ROOT)])
+        module = importlib.util.module_from_spec(spec)
+        sys.modules[PKG] = module
+        spec.loader.exec_module(module)
+    return sys.modules[PKG]
+
+
+@pytest.fixture(scope="module")
+def ext():
+    module = load_extension()
+    module.register()
+    yield module
+    module.unregister()
+
+
+NAMES = ("Chair_a", "Chair_b", "Table_a", "Table_b")
+
+
+@pytest.fixture
+def scene(ext):
+    bpy.ops.wm.read_factory_settings(use_empty=True)
+    for k, name in enumerate(NAMES):
+        bpy.ops.mesh.primitive_ico_sphere_add(subdivisions=2, location=(3 * k, 0, 0))
+        bpy.context.object.name = name
+        bpy.context.object.data.name = name
+    for o in bpy.context.scene.objects:
+        o.select_set(True)
+    return bpy.context.scene
+
+
+class FakeJob:
+    """Stands in for job.run_steps: records what it was given; clusters by name prefix; style
+    weight 1 on the upper half of each shape; optionally fails after a few steps."""
+
+    def __init__(self, job, fail=False):
+        self.job, self.fail, self.calls = job, fail, []
+
+    def __call__(self, meshes, options):
+        self.calls.append((meshes, options))
+        for i in range(len(meshes)):
+            yield ("render", i, len(meshes))
+            if self.fail and i == 1:
+                from style_coanalysis_ext.style_coanalysis.meshes import InputError
+                raise InputError(f"'{meshes[1].name}' could not be drawn")
+        shapes = []
+        for m in meshes:
+            cam = np.eye(4)
+            cam[:3, 3] = m.vertices.mean(0) + np.array([0.0, -4.0, 1.0])
+            w = (m.vertices[:, 2] > m.vertices[:, 2].mean()).astype(np.float32)
+            cluster = 0 if m.name.startswith("Chair") else 1
+            label = (options.labels or {}).get(m.name) or ("Ming" if cluster == 0 else "Qing")
+            shapes.append(self.job.ShapeOutcome(
+                name=m.name, cluster=cluster, label=label,
+                label_given=m.name in (options.labels or {}), confidence=0.9, best_view=5,
+                best_view_matrix=cam.tolist(), vertex_weights=w,
+                style_vertex_fraction=float(w.mean())))
+        clusters = [{"id": c, "size": sum(s.cluster == c for s in shapes),
+                     "members": [s.name for s in shapes if s.cluster == c],
+                     "label": ("Ming", "Qing")[c]} for c in (0, 1)]
+        yield ("done", len(meshes), len(meshes))
+        return self.job.JobResult(shapes=shapes, clusters=clusters, skipped=[], report={})
+
+
+@pytest.fixture
+def job(ext):
+    from style_coanalysis_ext.style_coanalysis.blender import job
+    return job
+
+
+@pytest.fixture
+def fake(job, monkeypatch):
+    f = FakeJob(job)
+    monkeypatch.setattr(job, "run_steps", f)
+    return f
+
+
+def test_analyse_hands_constraints_and_settings_to_the_job(scene, fake):
+    s = scene.style_coanalysis
+    bpy.ops.style.label_add(name="Ming")
+    bpy.data.objects["Chair_a"].style_coanalysis.label = "Ming"
+    bpy.data.objects["Table_a"].style_coanalysis.label = "Gone"       # not a label any more
+    bpy.ops.style.triplet_add(a="Chair_a", b="Chair_b", c="Table_a")
+    s.auto_clusters, s.n_clusters, s.eta, s.max_rounds, s.renderer = False, 2, 0.3, 2, "lineart"
+    assert bpy.ops.style.analyse() == {"FINISHED"}
+    (meshes, options), = fake.calls
+    assert [m.name for m in meshes] == list(NAMES)
+    assert options.labels == {"Chair_a": "Ming"}
+    assert options.triplets == [("Chair_a", "Chair_b", "Table_a")]
+    assert options.renderer == "lineart"
+    assert options.params.n_clusters == 2 and options.params.eta == pytest.approx(0.3)
+    assert options.params.max_rounds == 2 and options.params.n_representatives == 50
+    # written back once, at the end
+    assert [(c.cluster_id, c.size, c.label) for c in s.clusters] == [(0, 2, "Ming"), (1, 2, "Qing")]
+    chair = bpy.data.objects["Chair_a"]
+    assert chair["style_cluster"] == 0 and chair["style_label_given"]
+    assert chair.vertex_groups.get("style_weight") is not None
+
+
+def test_failed_run_leaves_the_scene_as_it_was(scene, job, monkeypatch):
+    monkeypatch.setattr(job, "run_steps", FakeJob(job, fail=True))
+    keys = {o.name: sorted(o.keys()) for o in scene.objects}
+    mats = len(bpy.data.materials)
+    with pytest.raises(RuntimeError, match="'Chair_b' could not be drawn"):
+        bpy.ops.style.analyse()
+    assert {o.name: sorted(o.keys()) for o in scene.objects} == keys
+    assert len(bpy.data.materials) == mats and "Style Clusters" not in bpy.data.collections
+    assert all(len(o.vertex_groups) == 0 for o in scene.objects)
+
+
+def test_modifier_changing_vertex_count_is_skipped_by_name(scene, fake):
+    bpy.data.objects["Table_b"].modifiers.new("Sub", "SUBSURF")
+    assert bpy.ops.style.analyse() == {"FINISHED"}
+    (meshes, _), = fake.calls
+    assert "Table_b" not in [m.name for m in meshes]
+    assert "style_cluster" not in bpy.data.objects["Table_b"]
+
+
+def test_collection_target(scene, fake):
+    col = bpy.data.collections.new("Chairs")
+    scene.collection.children.link(col)
+    for n in ("Chair_a", "Chair_b"):
+        col.objects.link(bpy.data.objects[n])
+    s = scene.style_coanalysis
+    s.target = "COLLECTION"
+    assert not bpy.ops.style.analyse.poll()              # no collection chosen yet
+    s.target_collection = col
+    assert bpy.ops.style.analyse() == {"FINISHED"}
+    assert [m.name for m in fake.calls[0][0]] == ["Chair_a", "Chair_b"]
+
+
+def test_results_operators(scene, fake):
+    assert bpy.ops.style.analyse() == {"FINISHED"}
+    s = scene.style_coanalysis
+    # select a cluster's members
+    assert bpy.ops.style.select_cluster(cluster=1) == {"FINISHED"}
+    assert sorted(o.name for o in bpy.context.selected_objects) == ["Table_a", "Table_b"]
+    # accept the prediction of the active object as its own label (creating the label)
+    bpy.context.view_layer.objects.active = bpy.data.objects["Table_a"]
+    assert bpy.ops.style.accept_prediction() == {"FINISHED"}
+    assert bpy.data.objects["Table_a"].style_coanalysis.label == "Qing"
+    assert "Qing" in s.label_names()
+    assert not bpy.ops.style.accept_prediction.poll()   # already accepted
+    # camera to the best view
+    assert bpy.ops.style.best_view_camera() == {"FINISHED"}
+    cam = bpy.data.objects["Style Best View"]
+    assert scene.camera == cam
+    expected = np.array(bpy.data.objects["Table_a"]["style_best_view_matrix"]).reshape(4, 4)
+    np.testing.assert_allclose(np.array(cam.matrix_world), expected, atol=1e-5)
+    assert bpy.ops.style.best_view_camera() == {"FINISHED"}      # reused, not duplicated
+    assert sum(o.type == "CAMERA" for o in bpy.data.objects) == 1
+    # hide and show the highlight
+    table = bpy.data.objects["Table_a"]
+    hl = len(table.data.materials) - 1
+    shown = sum(p.material_index == hl for p in table.data.polygons)
+    assert shown > 0
+    assert bpy.ops.style.toggle_highlight() == {"FINISHED"}
+    assert sum(p.material_index == hl for p in table.data.polygons) == 0
+    assert bpy.ops.style.toggle_highlight() == {"FINISHED"}
+    assert sum(p.material_index == hl for p in table.data.polygons) == shown
+    # clear everything the run wrote
+    assert bpy.ops.style.clear_results() == {"FINISHED"}
+    assert len(s.clusters) == 0 and "style_cluster" not in table
+    assert len(table.data.materials) == 0
+    assert not bpy.ops.style.clear_results.poll()
+
+
+def test_panels_and_lists_are_registered(ext):
+    for name in ("VIEW3D_PT_style", "VIEW3D_PT_style_advanced", "VIEW3D_PT_style_labels",
+                 "VIEW3D_PT_style_triplets", "VIEW3D_PT_style_results", "VIEW3D_PT_style_decimate",
+                 "OBJECT_PT_style_results", "STYLE_UL_labels", "STYLE_UL_triplets",
+                 "STYLE_UL_clusters"):
+        assert hasattr(bpy.types, name), name
+    assert bpy.types.VIEW3D_PT_style.bl_category == "Style"
