@@ -1,0 +1,52 @@
+"""OBJ and truth files round-trip, accept what real OBJ files contain, and name the file on errors."""
+import numpy as np
+import pytest
+
+from style_coanalysis import meshio, sample
+from style_coanalysis.meshes import InputError, Mesh
+
+
+def test_obj_round_trip_and_truth(tmp_path):
+    m = sample.make_shape("lattice", "stool", 3, "stool_x")
+    meshio.write_obj(m, tmp_path / "stool_x.obj")
+    meshio.write_truth(m, tmp_path / "stool_x.npz")
+    back = meshio.read_obj(tmp_path / "stool_x.obj")
+    assert back.name == "stool_x"
+    assert np.array_equal(back.faces, m.faces)
+    assert np.allclose(back.vertices, m.vertices, atol=1e-5)
+    t = meshio.read_truth(tmp_path / "stool_x.npz")
+    assert t["style"] == "lattice" and t["category"] == "stool"
+    assert np.array_equal(t["face_mask"], m.truth["face_mask"])
+
+
+def test_colours_quads_negative_indices_and_slashes(tmp_path):
+    p = tmp_path / "quad.obj"
+    p.write_text("# a unit square as a quad and a triangle with relative indices\n"
+                 "mtllib x.mtl\no thing\n"
+                 "v 0 0 0 1 0 0\nv 1 0 0 0 1 0\nv 1 1 0 0 0 1\nv 0 1 0 0.5 0.5 0.5\n"
+                 "vt 0 0\nvn 0 0 1\n"
+                 "f 1/1/1 2/1/1 3/1/1 4/1/1\n"
+                 "v 0 0 1\n"
+                 "f -1 -4//1 -3\n")
+    m = meshio.read_obj(p)
+    assert m.vertices.shape == (5, 3)
+    assert np.allclose(m.vertices[2], [1, 1, 0])           # colours were not read as coordinates
+    assert m.faces.tolist() == [[0, 1, 2], [0, 2, 3], [4, 1, 2]]
+
+
+@pytest.mark.parametrize("text", ["v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 7\n",
+                                  "v 0 0 0\nv 1 0 zero\n",
+                                  "\x00\x01binary junk\n",
+                                  "v 0 0 0\n"])
+def test_bad_file_names_the_file(tmp_path, text):
+    p = tmp_path / "broken_chair.obj"
+    p.write_text(text)
+    with pytest.raises(InputError, match="broken_chair.obj"):
+        meshio.read_obj(p)
+
+
+def test_truth_of_mesh_without_truth(tmp_path):
+    m = Mesh("plain", np.eye(3), [[0, 1, 2]])
+    meshio.write_truth(m, tmp_path / "plain.npz")
+    t = meshio.read_truth(tmp_path / "plain.npz")
+    assert t["style"] == "" and t["face_mask"].size == 0
