@@ -11,6 +11,7 @@ Deterministic for a given seed.
 from __future__ import annotations
 
 import warnings
+from typing import Callable
 
 import numpy as np
 from scipy.cluster.vq import kmeans2
@@ -51,16 +52,27 @@ def farthest_point_order(points: np.ndarray, n: int, start: int = 0) -> np.ndarr
     return chosen
 
 
-def sample_seeds(mesh: Mesh, n: int, seed: int = 0) -> tuple[np.ndarray, np.ndarray]:
+def sample_seeds(mesh: Mesh, n: int, seed: int = 0,
+                 keep: Callable[[np.ndarray, np.ndarray], np.ndarray] | None = None,
+                 ) -> tuple[np.ndarray, np.ndarray]:
     """`n` seeds on `mesh`'s surface, spread by area and kept apart.
 
-    Returns (points (n, 3) float32, face_idx (n,) int32). Same mesh and seed -> same seeds.
+    `keep(points, faces) -> bool mask` may drop candidates first: the renderer passes "seen by
+    at least one camera", since a seed buried between overlapping parts yields no patch in any
+    view (on the sample furniture over half the area is such hidden surface). If it keeps
+    nothing, all candidates are used. Returns (points (n, 3) float32, face_idx (n,) int32).
+    Same mesh, seed and filter -> same seeds.
     """
     if n <= 0:
         return np.zeros((0, 3), np.float32), np.zeros(0, np.int32)
     rng = np.random.default_rng(seed)
     m = max(MIN_CANDIDATES, CANDIDATES_PER_SEED * n)
     cand, cand_faces = sample_surface(mesh.vertices, mesh.faces, m, rng)
+    if keep is not None:
+        mask = np.asarray(keep(cand, cand_faces), bool)
+        if mask.sum() >= n:
+            cand, cand_faces = cand[mask], cand_faces[mask]
+            m = len(cand)
     pick = farthest_point_order(cand, n, start=int(rng.integers(m)))
     if n < 2:
         return cand[pick].astype(np.float32), cand_faces[pick].astype(np.int32)

@@ -84,3 +84,13 @@ def test_extract_handles_no_visible_seed():
     images = np.ones((1, 200, 200), np.float32)
     p = extract_patches([drawing_with(images, np.full((1, 2, 2), 100.0), np.zeros((1, 2), bool))])
     assert len(p) == 0 and p.images.shape == (0, 48, 48)
+
+
+def test_seed_filter_keeps_seeds_on_wanted_surface():
+    mesh = two_squares()
+    pts, faces = sample_seeds(mesh, 20, seed=0, keep=lambda p, f: f < 2)   # small square only
+    assert (faces < 2).all() and (pts[:, 0] <= 1.0).all()
+    assert pdist(pts).min() > 0.05
+    # a filter that keeps (almost) nothing is ignored rather than starving the sampler
+    pts, faces = sample_seeds(mesh, 20, seed=0, keep=lambda p, f: np.zeros(len(p), bool))
+    assert len(pts) == 20 and (faces >= 2).sum() > 10

@@ -387,8 +387,12 @@ def draw_shape(mesh: Mesh, settings: DrawingSettings, threads: int = 0) -> Shape
     if len(mesh.faces) == 0:
         raise InputError(f"'{mesh.name}' has no faces")
     rig = rig_for(settings)
-    seeds, seed_faces = sample_seeds(mesh, settings.n_seeds, settings.seed)
     tree = _bvh(mesh)
+
+    def seen_somewhere(points, faces):
+        return ray_visibility(tree, rig, points, own_face=faces).any(axis=0)
+
+    seeds, seed_faces = sample_seeds(mesh, settings.n_seeds, settings.seed, keep=seen_somewhere)
     seed_visible = ray_visibility(tree, rig, seeds, own_face=seed_faces)
     vertex_visible = ray_visibility(tree, rig, mesh.vertices, faces=mesh.faces)
     seed_pixels, _ = project(rig.matrices(), seeds)
