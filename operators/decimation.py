@@ -10,7 +10,8 @@ def _targets(context):
 
 
 def describe(res: dict) -> str:
-    kind = "style-preserving" if res["style_preserving"] else "plain"
+    kind = (("style-preserving" if res["hard"] else "style-preferring")
+            if res["style_preserving"] else "plain")
     return (f"'{res['object']}' {kind}: {res['triangles']} of {res['triangles_before']} triangles "
             f"(asked {res['requested_triangles']}), style regions "
             f"{res['style_triangles']} of {res['style_triangles_before']}")
@@ -34,6 +35,9 @@ class STYLE_OT_decimate(bpy.types.Operator):
         name="Match Style-Preserving Count", default=False,
         description="Plain only: tune the ratio to reach the triangle count the style-preserving "
                     "modifier reaches (fair comparison)")
+    hard: BoolProperty(name="Protect Fully", default=True,
+                       description="Never collapse vertices of style weight 1 (the ratio may be "
+                                   "out of reach); off: collapse style regions last")
     apply: BoolProperty(name="Apply", default=False,
                         description="Apply the modifier to the mesh")
 
@@ -57,9 +61,11 @@ class STYLE_OT_decimate(bpy.types.Operator):
                 continue
             try:
                 if self.style_preserving:
-                    res = decimate.add_decimate(obj, self.ratio, self.strength, True, self.apply)
+                    res = decimate.add_decimate(obj, self.ratio, self.strength, True, self.apply,
+                                                hard=self.hard)
                 elif self.match_style:
-                    ref = decimate.add_decimate(obj, self.ratio, self.strength, True, False)
+                    ref = decimate.add_decimate(obj, self.ratio, self.strength, True, False,
+                                                hard=self.hard)
                     res = decimate.match_plain_to(obj, ref["triangles"], apply=self.apply)
                 else:
                     res = decimate.add_decimate(obj, self.ratio, 0.0, False, self.apply)

@@ -168,12 +168,13 @@ class VIEW3D_PT_style_decimate(_StylePanel, bpy.types.Panel):
         col = self.layout.column()
         col.prop(s, "decimate_ratio")
         col.prop(s, "decimate_strength")
+        col.prop(s, "decimate_hard")
         col.prop(s, "decimate_apply")
         for text, style, match in (("Style-Preserving", True, False), ("Plain", False, False),
                                    ("Plain, Same Count", False, True)):
             op = col.operator("style.decimate", text=text)
-            op.ratio, op.strength, op.apply = (s.decimate_ratio, s.decimate_strength,
-                                               s.decimate_apply)
+            op.ratio, op.strength, op.apply, op.hard = (s.decimate_ratio, s.decimate_strength,
+                                                        s.decimate_apply, s.decimate_hard)
             op.style_preserving, op.match_style = style, match
         col.operator("style.decimate_remove", icon="X")
         obj = context.active_object

@@ -125,3 +125,13 @@ def test_operator_reports_counts(ext, grid):
     assert bpy.ops.style.decimate_remove() == {"FINISHED"}
     assert len(grid.modifiers) == 0
     assert not bpy.ops.style.decimate_remove.poll()
+
+
+def test_soft_protection_reaches_the_ratio_and_collapses_style_last(dec, grid):
+    soft = dec.add_decimate(grid, ratio=0.15, strength=1.0, hard=False)
+    assert soft["triangles"] == pytest.approx(0.15 * soft["triangles_before"], rel=0.02)
+    # 480 triangles left, 760 were style: style is decimated too, but keeps the larger share
+    plain = dec.match_plain_to(grid, soft["triangles"])
+    assert soft["style_triangles"] > 1.5 * plain["style_triangles"]
+    dec.remove_decimate(grid)
+    assert grid.vertex_groups.get(dec.SOFT_GROUP) is None and len(grid.modifiers) == 0

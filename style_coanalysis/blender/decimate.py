@@ -7,6 +7,11 @@ style weight 1 are never collapsed, intermediate weights cost more to collapse (
 `strength` = `vertex_group_factor`), weight 0 is decimated as usual. Because protected triangles
 stay, the requested ratio may be out of reach: every function reports the count actually reached.
 
+When the style regions hold most of the triangles (finely carved parts often do), hard protection
+cannot get anywhere near the requested ratio. `hard=False` drives the modifier with a derived group
+`style_weight_soft` (the weights capped at SOFT_CAP < 1): no vertex is then untouchable, but
+style edges cost far more to collapse, so the ratio is reached by decimating the rest first.
+
 One decimation per object at a time: adding the style-preserving modifier removes the plain one
 and vice versa (stacking both would decimate twice). Compare the two on duplicates, or one after
 the other as `match_plain_to` and the bench do.
@@ -20,8 +25,9 @@ from __future__ import annotations
 import bpy
 import numpy as np
 
-from .writeback import GROUP, THRESHOLD, vertex_weights
+from .writeback import GROUP, SOFT_GROUP, THRESHOLD, set_group_weights, vertex_weights
 
+SOFT_CAP = 0.99
 STYLE_MODIFIER = "Style Decimate"
 PLAIN_MODIFIER = "Plain Decimate"
 
@@ -53,14 +59,22 @@ def evaluated_counts(obj, depsgraph=None) -> tuple[int, int]:
 
 
 def remove_decimate(obj) -> None:
-    """Remove the decimate modifiers this module added (either kind)."""
+    """Remove the decimate modifiers this module added (either kind) and the soft group."""
     for name in (STYLE_MODIFIER, PLAIN_MODIFIER):
         mod = obj.modifiers.get(name)
         if mod is not None:
             obj.modifiers.remove(mod)
+    group = obj.vertex_groups.get(SOFT_GROUP)
+    if group is not None:
+        obj.vertex_groups.remove(group)
 
 
-def _set_modifier(obj, ratio, strength, style_preserving):
+def _soft_group(obj):
+    """(Re)write the capped copy of the style weights that soft protection drives."""
+    return set_group_weights(obj, SOFT_GROUP, np.minimum(vertex_weights(obj), SOFT_CAP)).name
+
+
+def _set_modifier(obj, ratio, strength, style_preserving, hard=True):
     name, other = ((STYLE_MODIFIER, PLAIN_MODIFIER) if style_preserving
                    else (PLAIN_MODIFIER, STYLE_MODIFIER))
     if obj.modifiers.get(other) is not None:
@@ -69,7 +83,7 @@ def _set_modifier(obj, ratio, strength, style_preserving):
     mod.decimate_type = "COLLAPSE"
     mod.ratio = float(ratio)
     if style_preserving:
-        mod.vertex_group = GROUP
+        mod.vertex_group = GROUP if hard else _soft_group(obj)
         mod.invert_vertex_group = True
         mod.vertex_group_factor = float(strength)
     else:
@@ -86,11 +100,11 @@ def _apply(obj, mod_name):
 
 
 def add_decimate(obj, ratio: float, strength: float = 1.0, style_preserving: bool = True,
-                 apply: bool = False, depsgraph=None) -> dict:
+                 apply: bool = False, depsgraph=None, hard: bool = True) -> dict:
     """Add (or update) a COLLAPSE Decimate modifier on `obj` and report what it reached.
 
     style_preserving=True drives the modifier with the `style_weight` group (inverted, factor =
-    strength); False is the plain twin for comparison. Returns triangle counts before/after,
+    strength); False is the plain twin for comparison. hard=False protects softly (see above). Returns triangle counts before/after,
     overall and inside style regions, and the requested target. With apply=True the modifier is
     applied to the mesh.
     """
@@ -99,13 +113,14 @@ def add_decimate(obj, ratio: float, strength: float = 1.0, style_preserving: boo
     if style_preserving and obj.vertex_groups.get(GROUP) is None:
         raise ValueError(f"'{obj.name}' has no '{GROUP}' vertex group: analyse it first")
     before, style_before = triangle_counts(obj)
-    mod = _set_modifier(obj, ratio, strength, style_preserving)
+    mod = _set_modifier(obj, ratio, strength, style_preserving, hard)
     after, style_after = evaluated_counts(obj, depsgraph)
     name = mod.name
     if apply:
         _apply(obj, name)
     return {
         "object": obj.name, "modifier": name, "style_preserving": style_preserving,
+        "hard": bool(hard) if style_preserving else None,
         "ratio": float(ratio), "strength": float(strength) if style_preserving else 0.0,
         "requested_triangles": int(round(ratio * before)),
         "triangles_before": before, "style_triangles_before": style_before,

@@ -203,6 +203,9 @@ class StyleSettings(bpy.types.PropertyGroup):
                                      default=1.0,
                                      description="How strongly style weights raise collapse cost "
                                                  "(vertices of weight 1 are never collapsed)")
+    decimate_hard: BoolProperty(name="Protect Fully", default=True,
+                                description="Never collapse vertices of style weight 1 (the ratio "
+                                            "may be out of reach); off: collapse them last")
     decimate_apply: BoolProperty(name="Apply", default=False,
                                  description="Apply the modifier to the mesh instead of keeping it")
 

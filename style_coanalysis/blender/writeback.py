@@ -28,6 +28,7 @@ import bpy
 import numpy as np
 
 GROUP = "style_weight"
+SOFT_GROUP = "style_weight_soft"        # capped copy written by decimate.py for soft protection
 HIGHLIGHT = "Style Highlight"
 ORIG_INDEX_ATTR = "style_orig_material_index"
 SLOTS_KEY = "style_slots_before"        # mesh: number of material slots before the write
@@ -62,6 +63,18 @@ def vertex_weights(obj_or_mesh_owner, mesh=None, group=GROUP) -> np.ndarray:
                 weights[v.index] = g.weight
                 break
     return weights
+
+
+def set_group_weights(obj, name: str, weights: np.ndarray):
+    """Create or overwrite vertex group `name` with one weight per vertex (all vertices)."""
+    group = obj.vertex_groups.get(name) or obj.vertex_groups.new(name=name)
+    # One add() call per distinct weight value: binary masks cost two calls, not one per vertex.
+    values, inverse = np.unique(np.asarray(weights, np.float32), return_inverse=True)
+    order = np.argsort(inverse, kind="stable")
+    bounds = np.searchsorted(inverse[order], np.arange(len(values) + 1))
+    for k, value in enumerate(values):
+        group.add(order[bounds[k]:bounds[k + 1]].tolist(), float(value), "REPLACE")
+    return group
 
 
 def face_mean(mesh, per_vertex: np.ndarray) -> np.ndarray:
@@ -144,13 +157,7 @@ def _write_mesh(obj, weights: np.ndarray, material) -> int:
     mesh = obj.data
     weights = np.clip(weights.astype(np.float32), 0.0, 1.0)
 
-    group = obj.vertex_groups.get(GROUP) or obj.vertex_groups.new(name=GROUP)
-    # One add() call per distinct weight value: binary masks cost two calls, not one per vertex.
-    values, inverse = np.unique(weights, return_inverse=True)
-    order = np.argsort(inverse, kind="stable")
-    bounds = np.searchsorted(inverse[order], np.arange(len(values) + 1))
-    for k, value in enumerate(values):
-        group.add(order[bounds[k]:bounds[k + 1]].tolist(), float(value), "REPLACE")
+    set_group_weights(obj, GROUP, weights)
 
     original = material_indices(mesh)
     slots_before = len(mesh.materials)
@@ -268,9 +275,10 @@ def _clear_mesh(obj):
     for key in (SLOTS_KEY, SHOWN_KEY, HAD_INDEX_KEY):
         if key in mesh:
             del mesh[key]
-    group = obj.vertex_groups.get(GROUP)
-    if group is not None:
-        obj.vertex_groups.remove(group)
+    for name in (GROUP, SOFT_GROUP):
+        group = obj.vertex_groups.get(name)
+        if group is not None:
+            obj.vertex_groups.remove(group)
     mesh.update()
 
 
