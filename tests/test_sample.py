@@ -58,3 +58,24 @@ def test_global_shape_baseline_near_chance(shapes):
     pur = np.mean([metrics.purity(baselines.cluster_baseline(feats, k, seed), truth)
                    for seed in range(3)])
     assert pur <= 1.0 / k + 0.15, pur
+
+
+def test_purity_eq5_and_triplets_on_small_cases():
+    truth = np.array(["a", "a", "a", "b", "b", "c"])
+    assert metrics.purity([0, 0, 1, 1, 1, 2], truth) == pytest.approx(5 / 6)
+    assert metrics.purity(np.arange(6), truth) == 1.0          # singletons are trivially pure
+    assert metrics.purity(np.zeros(6), truth) == pytest.approx(0.5)
+    s = metrics.score([0, 0, 0, 1, 1, 2], truth)
+    assert s["purity"] == s["nmi"] == s["ari"] == pytest.approx(1.0)
+    D = np.array([[0, 1, 2], [1, 0, 3], [2, 3, 0]], float)
+    assert metrics.triplet_accuracy(D, [[0, 1, 2], [0, 2, 1], [1, 0, 2]]) == pytest.approx(2 / 3)
+
+
+def test_line_statistics_see_orientation_and_ink():
+    img = np.zeros((40, 40), np.float32)
+    img[::8, :] = 1.0                                            # horizontal lines
+    stats = baselines.line_statistics([np.stack([img, img]), np.stack([img.T, img.T])])
+    assert stats.shape == (2, 1 + baselines.N_ORIENTATIONS)
+    assert stats[0, 0] == pytest.approx(img.mean())
+    assert np.argmax(stats[0, 1:]) != np.argmax(stats[1, 1:])  # rotated drawing, other bin
+    assert np.allclose(stats[:, 1:].sum(1), 1.0)

@@ -1,0 +1,60 @@
+"""Global-shape baseline (bounding-box proportions, face count, area -> standardise -> k-means):
+purity against style and against category, on the sample collection and on the voxel set.
+
+It must stay near chance on style for the sample collection (the collection was built so that
+only ornament tells styles apart); on the real voxel set it shows how much style the global shape
+already gives away there.
+
+    nice .venv/bin/python bench/bench_global_baseline.py [--size 120] [--seeds 5] [--no-voxels]
+"""
+from __future__ import annotations
+
+import argparse
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+
+sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
+
+from style_coanalysis import baselines, metrics, sample, voxels  # noqa: E402
+
+
+def report(label, feats, shapes, seeds):
+    for key in ("style", "category"):
+        truth = np.array([m.truth[key] for m in shapes])
+        classes, counts = np.unique(truth, return_counts=True)
+        k = len(classes)
+        runs = [metrics.score(baselines.cluster_baseline(feats, k, s), truth) for s in range(seeds)]
+        pur = np.array([r["purity"] for r in runs])
+        nmi = np.mean([r["nmi"] for r in runs])
+        print(f"{label:>8} {key:<9} k={k}  purity {pur.mean():.3f} +- {pur.std():.3f}  "
+              f"NMI {nmi:.3f}  chance(majority share) {counts.max() / counts.sum():.3f}  "
+              f"1/k {1 / k:.3f}")
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--size", type=int, default=120)
+    ap.add_argument("--seeds", type=int, default=5, help="k-means seeds (and sample seeds)")
+    ap.add_argument("--no-voxels", action="store_true")
+    args = ap.parse_args()
+    for gen_seed in range(3):
+        t0 = time.time()
+        shapes = sample.generate(args.size, seed=gen_seed)
+        gen = time.time() - t0
+        faces = [len(m.faces) for m in shapes]
+        print(f"sample seed {gen_seed}: {len(shapes)} shapes generated in {gen:.2f} s, "
+              f"{min(faces)}-{max(faces)} triangles")
+        report("sample", baselines.global_shape_features(shapes), shapes, args.seeds)
+    if not args.no_voxels:
+        t0 = time.time()
+        vox = voxels.load_hu2017()
+        print(f"voxel set: {len(vox)} shapes loaded in {time.time() - t0:.1f} s")
+        report("voxels", baselines.global_shape_features(vox), vox, args.seeds)
+        report("vox-raw", baselines.raw_size(vox), vox, args.seeds)
+
+
+if __name__ == "__main__":
+    main()
