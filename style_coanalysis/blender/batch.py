@@ -28,12 +28,9 @@ from ..cache import CODE_VERSION, DrawingCache, cache_key
 from ..drawings import ShapeDrawings
 from ..meshes import InputError, Mesh, normalise
 from ..params import DrawingSettings
+from ..progress import Cancelled  # noqa: F401  (raised here, re-exported for callers)
 
 Progress = Callable[[str, int, int], None]
-
-
-class Cancelled(Exception):
-    """The caller's cancel() returned True between two shapes."""
 
 
 def in_blender_gui() -> bool:
