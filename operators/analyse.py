@@ -18,6 +18,52 @@ from ..style_coanalysis.params import AnalysisParams
 STEP_BUDGET_S = 0.1     # time spent in the generator per TIMER event before yielding to the UI
 
 
+class Stepper:
+    """Advances the job generator for a time budget per call (one call per TIMER event).
+
+    Plain Python so its behaviour (progress, result, cancel) is testable without a window.
+    `advance` returns True while the job runs; afterwards `result` holds the JobResult. Errors
+    from the job propagate. `cancel` closes the generator, so the job's own clean-up runs.
+    """
+
+    def __init__(self, gen, budget_s: float = STEP_BUDGET_S, clock=time.monotonic):
+        self.gen, self.budget_s, self.clock = gen, budget_s, clock
+        self.progress = ("starting", 0, 1)
+        self.result = None
+
+    def advance(self) -> bool:
+        deadline = self.clock() + self.budget_s
+        try:
+            while True:
+                self.progress = next(self.gen)
+                if self.clock() >= deadline:
+                    return True
+        except StopIteration as stop:
+            self.result, self.gen = stop.value, None
+            return False
+        except BaseException:
+            self.gen = None
+            raise
+
+    def run_to_end(self):
+        self.budget_s = float("inf")
+        self.advance()
+        return self.result
+
+    def cancel(self):
+        gen, self.gen = self.gen, None
+        if gen is not None:
+            gen.close()
+
+    def status(self) -> str:
+        stage, done, total = self.progress
+        return f"Style analysis: {stage} {done}/{total} (Esc to cancel)"
+
+    def fraction(self) -> float:
+        _, done, total = self.progress
+        return min(1.0, done / total) if total else 0.0
+
+
 def target_names(context) -> list:
     """Names of the mesh objects to analyse (selected, or a collection's), sorted for determinism."""
     settings = context.scene.style_coanalysis
@@ -137,8 +183,7 @@ class STYLE_OT_analyse(bpy.types.Operator):
             return False
         for w in warnings:
             self.report({"WARNING"}, w)
-        self._gen = job.run_steps(meshes, options)
-        self._names = [m.name for m in meshes]
+        self._stepper = Stepper(job.run_steps(meshes, options))
         return True
 
     def _fail(self, exc):
@@ -169,15 +214,13 @@ class STYLE_OT_analyse(bpy.types.Operator):
         if not self._start(context):
             return {"CANCELLED"}
         try:
-            while True:
-                next(self._gen)
-        except StopIteration as stop:
-            return self._finish(context, stop.value)
+            result = self._stepper.run_to_end()
         except Exception as exc:  # noqa: BLE001 - reported to the person, scene untouched
             self._fail(exc)
             return {"CANCELLED"}
         finally:
-            self._gen = None
+            self._stepper = None
+        return self._finish(context, result)
 
     # -- interactive: stepped by timer events
 
@@ -202,9 +245,9 @@ class STYLE_OT_analyse(bpy.types.Operator):
         wm.progress_end()
         if context.workspace is not None:
             context.workspace.status_text_set(None)
-        gen, self._gen = getattr(self, "_gen", None), None
-        if gen is not None:
-            gen.close()         # lets the job release its workers and files
+        stepper, self._stepper = getattr(self, "_stepper", None), None
+        if stepper is not None:
+            stepper.cancel()    # lets the job release its workers and threads
         type(self)._running = False
 
     def modal(self, context, event):
@@ -212,29 +255,24 @@ class STYLE_OT_analyse(bpy.types.Operator):
             self._cleanup(context)
             self.report({"WARNING"}, "Style analysis cancelled: the scene is unchanged")
             return {"CANCELLED"}
-        if event.type != "TIMER" or event.window_manager_timer != self._timer:
+        if event.type != "TIMER":
             if event.type in {"MIDDLEMOUSE", "WHEELUPMOUSE", "WHEELDOWNMOUSE", "TRACKPADPAN",
                               "TRACKPADZOOM", "MOUSEMOVE"}:
                 return {"PASS_THROUGH"}     # let the view be navigated while it runs
             return {"RUNNING_MODAL"}        # but no edits: the result must still fit the scene
-        deadline = time.monotonic() + STEP_BUDGET_S
+        stepper = self._stepper
         try:
-            while time.monotonic() < deadline:
-                stage, done, total = next(self._gen)
-                frac = done / total if total else 0.0
-                context.window_manager.progress_update(int(1000 * frac))
-                context.workspace.status_text_set(
-                    f"Style analysis: {stage} {done}/{total} (Esc to cancel)")
-        except StopIteration as stop:
-            self._gen = None
-            self._cleanup(context)
-            return self._finish(context, stop.value)
-        except Exception as exc:  # noqa: BLE001
-            self._gen = None
+            running = stepper.advance()
+        except Exception as exc:  # noqa: BLE001 - reported to the person, scene untouched
             self._cleanup(context)
             self._fail(exc)
             return {"CANCELLED"}
-        return {"RUNNING_MODAL"}
+        if running:
+            context.window_manager.progress_update(int(1000 * stepper.fraction()))
+            context.workspace.status_text_set(stepper.status())
+            return {"RUNNING_MODAL"}
+        self._cleanup(context)
+        return self._finish(context, stepper.result)
 
     def cancel(self, context):
         """Blender aborts the modal (file load, window closed): stop without writing."""

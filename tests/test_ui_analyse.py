@@ -192,3 +192,27 @@ def test_panels_and_lists_are_registered(ext):
                  "STYLE_UL_clusters"):
         assert hasattr(bpy.types, name), name
     assert bpy.types.VIEW3D_PT_style.bl_category == "Style"
+
+
+def test_stepper_progress_result_and_cancel(ext):
+    """The modal path's logic, without a window: budgeted steps, the result, and Esc closing the
+    generator so the job's clean-up runs (and nothing is returned to write back)."""
+    from style_coanalysis_ext.operators.analyse import Stepper
+    log = []
+
+    def job():
+        try:
+            for i in range(5):
+                log.append(i)
+                yield ("render", i, 5)
+            return "result"
+        finally:
+            log.append("closed")
+
+    ticks = iter(range(100))
+    st = Stepper(job(), budget_s=2, clock=lambda: next(ticks))   # two steps per advance
+    assert st.advance() and st.progress == ("render", 1, 5) and log == [0, 1]
+    assert st.fraction() == pytest.approx(0.2) and "render 1/5" in st.status()
+    st.cancel()
+    assert log[-1] == "closed" and st.result is None
+    assert Stepper(job()).run_to_end() == "result"

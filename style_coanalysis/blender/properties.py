@@ -44,8 +44,8 @@ def default_cache_dir() -> str:
         base = bpy.utils.extension_path_user(ROOT_PACKAGE, path="", create=True)
         return os.path.join(base, "cache")
     except (ValueError, RuntimeError, TypeError):
-        root = os.environ.get("XDG_CACHE_HOME") or os.path.join(os.path.expanduser("~"), ".cache")
-        return os.path.join(root, "style_coanalysis")
+        from ..cache import default_cache_dir as core_default   # the command line's default
+        return os.fspath(core_default())
 
 
 def preferences(context=None):
