@@ -1,0 +1,294 @@
+"""The whole analysis in one call (paper 4.1-4.5): drawings in, style clusters and style filters out.
+
+    patches -> HOG maps -> representatives per view -> encode -> [fuse -> cluster -> reselect]*
+
+The bracket is the cluster-and-select loop of 4.5. Every candidate filter (the k-means
+representatives) is encoded once; re-encoding with a reselected set is then a column selection of
+that encoding, so each round costs only fusion and clustering. Reselection picks from the whole
+candidate pool every round (not from the previous survivors), so a filter dropped on the strength
+of an early, poor clustering can come back. The loop stops when neither the clusters (up to a
+renaming) nor the filter set change, or after `params.max_rounds` rounds. Constraints (labels or
+triplets) act in every round's clustering. Nothing here reads ground truth.
+"""
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass, field
+
+import numpy as np
+from scipy.optimize import linear_sum_assignment
+
+from .constraints import labels_to_array, triplets_to_array, validate_labels, validate_triplets
+from .drawings import ShapeDrawings
+from .encoding import build_filter_bank, correlate_pooled, cross_view_responses, view_features
+from .features import hog_images
+from .meshes import InputError
+from .params import AnalysisParams
+from .patches import extract_patches
+from .progress import Progress
+from .reselection import reselect
+
+FUSIONS = ("pslf", "concat", "pca", "cca", "maxpool")
+
+
+@dataclass
+class StyleFilter:
+    """A kept filter: a real patch (source shape/seed/pixel in its view) and the style it marks."""
+
+    cluster: int
+    view: int
+    hog: np.ndarray
+    source_shape: int
+    source_seed: int
+    source_pixel: tuple[float, float]
+    score: float
+
+
+@dataclass
+class AnalysisResult:
+    names: list[str]
+    clusters: np.ndarray            # (N,) int 0..C-1
+    n_clusters: int
+    fused: np.ndarray               # (N, D)
+    confidence: np.ndarray          # (N,) in [0, 1]
+    classes: list[str] | None       # label mode: style names, cluster c <-> classes[c]
+    predicted: list[str] | None     # label mode: predicted (or given) style per shape
+    label_given: np.ndarray         # (N,) bool
+    style_filters: list[StyleFilter]
+    responses: np.ndarray           # (N, V, F) whole-image max response of final filter f in view v
+    view_weights: np.ndarray | None
+    rounds: list[dict] = field(default_factory=list)
+    timings: dict = field(default_factory=dict)
+
+
+def _check_inputs(drawings, params, labels, triplets, fusion):
+    """Refuse bad input before any work: nothing runs half-way."""
+    if fusion not in FUSIONS:
+        raise InputError(f"unknown fusion '{fusion}', choose one of {', '.join(FUSIONS)}")
+    if len(drawings) < 2:
+        raise InputError(f"need at least two shapes to analyse, got {len(drawings)}")
+    names = [d.name for d in drawings]
+    dup = sorted({n for n in names if names.count(n) > 1})
+    if dup:
+        raise InputError("shape names must be unique: " + ", ".join(f"'{n}'" for n in dup))
+    shapes = {tuple(d.images.shape) for d in drawings}
+    if len(shapes) != 1:
+        raise InputError(f"all shapes need the same number and size of views, got {sorted(shapes)}")
+    if labels is not None and triplets is not None:
+        raise InputError("give either style labels or triplets, not both")
+    if params.n_clusters is not None and params.n_clusters < 1:
+        raise InputError(f"number of clusters must be at least 1, got {params.n_clusters}")
+    y = classes = trip = None
+    if labels is not None:
+        validate_labels(labels)
+        y, classes = labels_to_array(labels, names)
+    if triplets is not None:
+        validate_triplets(triplets)
+        trip = triplets_to_array(triplets, names)
+    return names, y, classes, trip
+
+
+def _relabel_by_appearance(labels: np.ndarray) -> np.ndarray:
+    """Cluster ids 0..C-1 in order of first appearance: same partition, stable names."""
+    _, first = np.unique(labels, return_index=True)
+    order = np.unique(labels)[np.argsort(first)]
+    lut = {c: i for i, c in enumerate(order)}
+    return np.array([lut[c] for c in labels], np.int64)
+
+
+def n_changed(old: np.ndarray | None, new: np.ndarray) -> int:
+    """Shapes whose cluster changed, after the best one-to-one renaming of clusters."""
+    if old is None:
+        return int(len(new))
+    a, b = np.unique(old, return_inverse=True)[1], np.unique(new, return_inverse=True)[1]
+    table = np.zeros((a.max() + 1, b.max() + 1), np.int64)
+    np.add.at(table, (a, b), 1)
+    r, c = linear_sum_assignment(-table)
+    return int(len(new) - table[r, c].sum())
+
+
+def _partition_key(labels: np.ndarray) -> bytes:
+    """The partition independent of cluster names."""
+    return _relabel_by_appearance(np.asarray(labels)).astype(np.int64).tobytes()
+
+
+def _soft_confidence(x: np.ndarray, clusters: np.ndarray) -> np.ndarray:
+    """Membership of the assigned cluster from squared distances to cluster means (softmax).
+
+    The temperature is the mean squared distance of shapes to their own centre, so a shape at a
+    typical distance from its centre and far from the others gets a confidence near 1.
+    """
+    ids = np.unique(clusters)
+    centres = np.stack([x[clusters == c].mean(axis=0) for c in ids])
+    d2 = ((x[:, None, :] - centres[None]) ** 2).sum(axis=2)
+    own = d2[np.arange(len(x)), np.searchsorted(ids, clusters)]
+    temp = max(float(own.mean()), 1e-12)
+    logits = -(d2 - d2.min(axis=1, keepdims=True)) / temp
+    p = np.exp(logits)
+    p /= p.sum(axis=1, keepdims=True)
+    return p[np.arange(len(x)), np.searchsorted(ids, clusters)]
+
+
+def _fuse(views, params, y, fusion):
+    """Fused features (N, D), view weights (or None) and the fitted PSLF (label mode)."""
+    views = [v for v in views if v.shape[1] > 0]
+    if fusion == "pslf":
+        from .pslf import PSLF
+        model = PSLF(n_components=params.n_components, eta=params.eta, lam=params.lam,
+                     beta=params.beta, gamma=params.gamma, random_state=params.random_state)
+        fused = model.fit_transform(views, y=y)
+        return fused, np.asarray(model.view_weights_), model
+    from . import fusion as fusion_mod
+    cls = {"concat": "ConcatFusion", "pca": "PCAFusion", "cca": "CCAFusion",
+           "maxpool": "MaxPoolFusion"}[fusion]
+    return np.asarray(getattr(fusion_mod, cls)().fit_transform(views)), None, None
+
+
+def _cluster(fused, params, y, trip, model, n_fixed):
+    """(clusters, confidence, n_clusters) in the mode the constraints ask for."""
+    from .clustering import SelfTuningSpectralClustering, TripletClustering
+    rs = params.random_state
+    if y is not None:
+        n_cls = int(y.max()) + 1
+        if model is not None and model.transduction_ is not None:
+            clusters = np.asarray(model.transduction_, np.int64)
+            dist = np.asarray(model.label_distribution_, np.float64)
+            full = np.zeros((len(fused), n_cls))
+            full[:, np.asarray(model.classes_, np.int64)] = dist
+        else:   # a baseline fusion: spread the labels over a k-NN graph of the fused features
+            from sklearn.semi_supervised import LabelSpreading
+            ls = LabelSpreading(kernel="knn", n_neighbors=min(7, len(fused) - 1)).fit(fused, y)
+            clusters = np.asarray(ls.transduction_, np.int64)
+            full = np.zeros((len(fused), n_cls))
+            full[:, ls.classes_[ls.classes_ >= 0]] = ls.label_distributions_
+        clusters[y >= 0] = y[y >= 0]                       # a given label is never overruled
+        conf = full[np.arange(len(fused)), clusters] / np.maximum(full.sum(axis=1), 1e-12)
+        conf[y >= 0] = 1.0
+        return clusters, np.clip(conf, 0, 1), n_cls
+    if trip is not None:
+        n_c = n_fixed
+        if n_c is None:
+            auto = SelfTuningSpectralClustering(n_clusters=None, random_state=rs)
+            auto.fit_predict(fused)
+            n_c = int(auto.n_clusters_)
+        model_t = TripletClustering(n_clusters=n_c, random_state=rs)
+        raw = np.asarray(model_t.fit_predict(fused, trip))
+        memb = np.asarray(model_t.membership_, np.float64)
+        conf = memb[np.arange(len(raw)), raw] / np.maximum(memb.sum(axis=1), 1e-12)
+        clusters = _relabel_by_appearance(raw)
+        return clusters, np.clip(conf, 0, 1), int(len(np.unique(clusters)))
+    model_u = SelfTuningSpectralClustering(n_clusters=params.n_clusters, random_state=rs)
+    clusters = _relabel_by_appearance(np.asarray(model_u.fit_predict(fused)))
+    return clusters, _soft_confidence(fused, clusters), int(len(np.unique(clusters)))
+
+
+def analyse(drawings: list[ShapeDrawings], params: AnalysisParams,
+            labels: dict | None = None, triplets: list | None = None, fusion: str = "pslf",
+            progress=None, cancel=None) -> AnalysisResult:
+    """Cluster shapes by style and find their style filters (unsupervised, labels or triplets)."""
+    timings: dict[str, float] = {}
+    prog = Progress.wrap(progress, cancel)
+    names, y, classes, trip = _check_inputs(drawings, params, labels, triplets, fusion)
+    n = len(drawings)
+    n_views = drawings[0].n_views
+    image_size = tuple(drawings[0].images.shape[1:3])
+
+    t = time.perf_counter()
+    prog.step("patches", 0, 1)
+    patches = extract_patches(drawings, size=params.patch_size)
+    if len(patches) == 0:
+        raise InputError("no patch with ink in any drawing: the shapes drew no lines")
+    timings["patches"] = time.perf_counter() - t
+
+    t = time.perf_counter()
+    maps = []
+    for i, d in enumerate(drawings):
+        prog.step("hog", i, n)
+        maps.append(hog_images(d.images))
+    maps = np.stack(maps)                                     # (N, V, by, bx, C)
+    timings["hog"] = time.perf_counter() - t
+
+    t = time.perf_counter()
+    prog.step("representatives", 0, 1)
+    bank = build_filter_bank(maps, patches.shape, patches.view, patches.seed, patches.centre,
+                             params.patch_size, params.n_representatives, params.random_state)
+    timings["representatives"] = time.perf_counter() - t
+
+    t = time.perf_counter()
+    pooled = np.zeros((n, len(bank), 5), np.float32)
+    for v in range(n_views):
+        prog.step("encode", v, n_views)
+        idx = np.flatnonzero(bank.view == v)
+        if len(idx):
+            pooled[:, idx] = correlate_pooled(maps[:, v], bank.hog[idx], image_size)
+    timings["encode"] = time.perf_counter() - t
+    support_resp = pooled[:, :, 0]
+
+    keep = np.ones(len(bank), bool)
+    clusters = prev = None
+    n_fixed = params.n_clusters
+    rounds = []
+    seen = set()                                              # states met before: a cycle ends too
+    for r in range(max(1, params.max_rounds)):
+        t = time.perf_counter()
+        prog.step("fuse", r, params.max_rounds)
+        used = keep
+        fused, weights, model = _fuse(view_features(pooled, bank.view, used, n_views), params, y,
+                                      fusion)
+        timings["fuse"] = timings.get("fuse", 0.0) + time.perf_counter() - t
+
+        t = time.perf_counter()
+        prog.step("cluster", r, params.max_rounds)
+        clusters, conf, n_c = _cluster(fused, params, y, trip, model, n_fixed)
+        if trip is not None and n_fixed is None:
+            n_fixed = n_c                                     # the automatic choice, kept fixed
+        timings["cluster"] = timings.get("cluster", 0.0) + time.perf_counter() - t
+
+        t = time.perf_counter()
+        prog.step("reselect", r, params.max_rounds)
+        sel = reselect(support_resp, clusters, bank.view, mu=params.mu)
+        timings["reselect"] = timings.get("reselect", 0.0) + time.perf_counter() - t
+        changed = n_changed(prev, clusters)
+        same_filters = bool(np.array_equal(sel.keep, keep))
+        rounds.append({"round": r, "n_filters": int(keep.sum()), "n_clusters": n_c,
+                       "n_changed": changed, "n_selected": int(sel.keep.sum()),
+                       "n_passed": sel.n_passed})
+        state = (_partition_key(clusters), sel.keep.tobytes())
+        if (prev is not None and changed == 0 and same_filters) or state in seen:
+            break
+        seen.add(state)
+        prev, keep = clusters, sel.keep
+
+    t = time.perf_counter()
+    prog.step("responses", 0, 1)
+    final = np.flatnonzero(sel.keep)
+    responses = cross_view_responses(maps, bank.subset(final), image_size)
+    timings["responses"] = time.perf_counter() - t
+
+    best = sel.scores.argmax(axis=0) if sel.scores.size else np.zeros(len(bank), np.int64)
+    cluster_ids = np.unique(clusters)
+    style_filters = [StyleFilter(cluster=int(cluster_ids[best[f]]) if len(cluster_ids) > 1 else
+                                 int(cluster_ids[0]),
+                                 view=int(bank.view[f]), hog=bank.hog[f],
+                                 source_shape=int(bank.shape[f]), source_seed=int(bank.seed[f]),
+                                 source_pixel=(float(bank.pixel[f, 0]), float(bank.pixel[f, 1])),
+                                 score=float(sel.score[f])) for f in final]
+    predicted = [classes[c] for c in clusters] if classes is not None else None
+    label_given = (y >= 0) if y is not None else np.zeros(n, bool)
+    if weights is not None and len(weights) != n_views:      # views without filters were dropped
+        full = np.zeros(n_views)
+        full[[v for v in range(n_views) if (used & (bank.view == v)).any()]] = weights
+        weights = full
+    n_clusters = len(classes) if classes is not None else int(len(np.unique(clusters)))
+    prog.step("done", 1, 1)
+    return AnalysisResult(names=names, clusters=np.asarray(clusters, np.int64),
+                          n_clusters=n_clusters, fused=np.asarray(fused), confidence=conf,
+                          classes=classes, predicted=predicted, label_given=label_given,
+                          style_filters=style_filters, responses=responses, view_weights=weights,
+                          rounds=rounds, timings=timings)
+
+
+def style_similarity(result: AnalysisResult) -> np.ndarray:
+    """(N, N) style distance between shapes, from the fused features (clustering.style_distance)."""
+    from .clustering import style_distance
+    return np.asarray(style_distance(result.fused))
