@@ -210,11 +210,14 @@ def _turned_profile(rng, n_orn=None, bulge=(1.7, 2.2)):
                     for xi in x]
         else:
             x = np.linspace(0, 1, 6)
-            pts += [(t0 + w * 1.6 * xi, 1.0 + (amp - 1) * 0.8 * np.sin(np.pi * xi) ** 2)
+            wv = min(1.6 * w, b - t0)
+            pts += [(t0 + wv * xi, 1.0 + (amp - 1) * 0.8 * np.sin(np.pi * xi) ** 2)
                     for xi in x]
     pts.append((1.0, 1.0))
     p = np.array(pts)
     p[:, 0] = np.maximum.accumulate(np.clip(p[:, 0], 0, 1))
+    keep = np.r_[True, np.any(np.abs(np.diff(p, axis=0)) > 1e-9, axis=1)]  # no zero-area rings
+    p = p[keep]
     return p[:, 0], p[:, 1]
 
 

@@ -3,7 +3,7 @@ import numpy as np
 import pytest
 
 from style_coanalysis import baselines, metrics, sample
-from style_coanalysis.meshes import validate
+from style_coanalysis.meshes import face_areas, validate
 
 
 @pytest.fixture(scope="module")
@@ -38,6 +38,8 @@ def test_meshes_valid_grounded_moderate_with_partial_masks(shapes):
         validate(m)
         assert abs(float(m.vertices[:, 2].min())) < 1e-6, m.name          # stands on z = 0
         assert 1000 <= len(m.faces) <= 10000, (m.name, len(m.faces))
+        areas = face_areas(m.vertices, m.faces)                          # renderers warn on these
+        assert areas.min() > 1e-9 * np.ptp(m.vertices, axis=0).max() ** 2, m.name
         mask = m.truth["face_mask"]
         assert mask.dtype == bool and mask.shape == (len(m.faces),)
         assert 0 < mask.sum() < len(mask), m.name
