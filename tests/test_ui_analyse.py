@@ -216,3 +216,67 @@ def test_stepper_progress_result_and_cancel(ext):
     st.cancel()
     assert log[-1] == "closed" and st.result is None
     assert Stepper(job()).run_to_end() == "result"
+
+
+class CheckingLayout:
+    """Stands in for UILayout (panels cannot draw in background mode) and checks what a panel
+    asks for: every property exists on its data, every operator exists and every operator
+    property set by the panel is one of its own."""
+
+    def __init__(self, seen):
+        self.seen = seen
+
+    def __getattr__(self, name):            # enabled, use_property_split, ... are plain flags
+        return None
+
+    def _child(self, *a, **k):
+        return CheckingLayout(self.seen)
+
+    row = column = box = split = _child
+
+    def label(self, **k):
+        self.seen.append(("label", k.get("text")))
+
+    def prop(self, data, name, **k):
+        assert name in data.bl_rna.properties, f"{data} has no property {name!r}"
+        self.seen.append(("prop", name))
+
+    def template_list(self, list_id, _list, data, coll, active_data, active, **k):
+        assert hasattr(bpy.types, list_id), list_id
+        assert coll in data.bl_rna.properties and active in active_data.bl_rna.properties
+        self.seen.append(("list", list_id))
+
+    def operator(self, idname, **k):
+        cat, name = idname.split(".")
+        op = getattr(getattr(bpy.ops, cat), name)
+        names = set(op.get_rna_type().properties.keys())
+        self.seen.append(("op", idname))
+
+        class Props:
+            def __setattr__(self, key, value):
+                assert key in names, f"{idname} has no property {key!r}"
+
+        return Props()
+
+
+def test_panels_draw_what_exists(scene, fake):
+    """Every panel's draw, before and after a run, only uses existing properties and operators."""
+    from types import SimpleNamespace
+    from style_coanalysis_ext import panels
+    ctx = bpy.context
+    for when in ("before", "after"):
+        if when == "after":
+            assert bpy.ops.style.analyse() == {"FINISHED"}
+            bpy.ops.style.decimate(ratio=0.5)
+        seen = []
+        for cls in panels.CLASSES:
+            if issubclass(cls, bpy.types.Panel):
+                fake_self = SimpleNamespace(layout=CheckingLayout(seen))
+                cls.draw(fake_self, SimpleNamespace(scene=ctx.scene, object=ctx.active_object,
+                                                    active_object=ctx.active_object,
+                                                    selected_objects=ctx.selected_objects))
+        ops = {v for k, v in seen if k == "op"}
+        assert {"style.analyse", "style.label_add", "style.triplet_add", "style.decimate",
+                "style.best_view_camera", "style.clear_results"} <= ops
+    # after the run the active object's results are shown
+    assert any(k == "label" and v and v.startswith("Cluster ") for k, v in seen)
