@@ -6,6 +6,7 @@ only ornament tells styles apart); on the real voxel set it shows how much style
 already gives away there.
 
     nice .venv/bin/python bench/bench_global_baseline.py [--size 120] [--seeds 5] [--no-voxels]
+        [--lines N]   # also the line-statistics baseline on N sample shapes (Line Art drawings, bpy)
 """
 from __future__ import annotations
 
@@ -39,6 +40,8 @@ def main():
     ap.add_argument("--size", type=int, default=120)
     ap.add_argument("--seeds", type=int, default=5, help="k-means seeds (and sample seeds)")
     ap.add_argument("--no-voxels", action="store_true")
+    ap.add_argument("--lines", type=int, default=0,
+                    help="render N sample shapes with Line Art and score the line-statistics baseline")
     args = ap.parse_args()
     for gen_seed in range(3):
         t0 = time.time()
@@ -54,6 +57,24 @@ def main():
         print(f"voxel set: {len(vox)} shapes loaded in {time.time() - t0:.1f} s")
         report("voxels", baselines.global_shape_features(vox), vox, args.seeds)
         report("vox-raw", baselines.raw_size(vox), vox, args.seeds)
+    if args.lines:
+        line_baseline(args.lines, args.seeds)
+
+
+def line_baseline(n, seeds):
+    """Ink density + orientation histogram of the 12 drawings: does plain line texture give style away?"""
+    import bpy
+
+    from style_coanalysis.blender.render import draw_shape
+    from style_coanalysis.meshes import normalise
+    from style_coanalysis.params import DrawingSettings
+
+    bpy.ops.wm.read_factory_settings(use_empty=True)
+    shapes = sample.generate(n, seed=0)
+    t0 = time.time()
+    images = [draw_shape(normalise(m), DrawingSettings(renderer="lineart")).images for m in shapes]
+    print(f"line drawings of {n} shapes (Line Art) in {time.time() - t0:.1f} s")
+    report("lines", baselines.line_statistics(images), shapes, seeds)
 
 
 if __name__ == "__main__":
