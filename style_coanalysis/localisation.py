@@ -6,6 +6,9 @@ the paper's decimation application) is compared with the cluster's style filters
 (cosine of the block histograms, the same similarity the encoding uses). A patch that reaches
 `match_threshold` marks its footprint: the mesh vertices seen in that view that project inside
 the patch window and lie near the seed in 3D (so a surface far behind the window is not taken).
+A fixed similarity threshold alone marks almost every patch (line drawings share a lot of
+generic corners and edges), so a patch must also be closer to its own cluster's style filters
+than to the other clusters' ones: it must look like *this* style, not like style in general.
 
 A vertex's style weight is the share of the views that see it in which it was marked: 1 means
 "style-bearing from every side it can be seen", 0 "never". Best view: the view with the most
@@ -54,8 +57,10 @@ def footprint(vertices: np.ndarray, pixels: np.ndarray, depth: np.ndarray, visib
 
 def localise_shape(drawings: ShapeDrawings, vertices: np.ndarray, filters: np.ndarray,
                    patch_size: int, threshold: float, focal: float,
-                   maps: np.ndarray | None = None) -> ShapeLocalisation:
-    """Per-vertex style weights of one shape from its cluster's style filters (F, ...)."""
+                   maps: np.ndarray | None = None, others: np.ndarray | None = None,
+                   ) -> ShapeLocalisation:
+    """Per-vertex style weights of one shape from its cluster's style filters (F, ...);
+    `others` are the other clusters' style filters, which a match must be closer to."""
     n_views = drawings.n_views
     n_vert = len(vertices)
     if maps is None:
@@ -67,6 +72,7 @@ def localise_shape(drawings: ShapeDrawings, vertices: np.ndarray, filters: np.nd
     view_sims = np.zeros(n_views)
     matches = []
     unit_filters = _unit(filters) if len(filters) else np.zeros((0, 1), np.float32)
+    unit_others = _unit(others) if others is not None and len(others) else None
     half = patch_size / 2.0
     for v in range(n_views):
         seeds = np.flatnonzero(drawings.seed_visible[v])
@@ -74,24 +80,35 @@ def localise_shape(drawings: ShapeDrawings, vertices: np.ndarray, filters: np.nd
             continue
         desc, _ = patch_descriptors(maps, np.full(len(seeds), v), drawings.seed_pixels[v, seeds],
                                     patch_size)
-        sim = (_unit(desc) @ unit_filters.T).max(axis=1)
-        for j, s in zip(seeds[sim >= threshold], sim[sim >= threshold]):
+        desc = _unit(desc)
+        sim = (desc @ unit_filters.T).max(axis=1)
+        ok = sim >= threshold
+        if unit_others is not None:
+            ok &= sim > (desc @ unit_others.T).max(axis=1)
+        for j, s in zip(seeds[ok], sim[ok]):
             marked[v] |= footprint(vertices, vpix[v], vdepth[v], drawings.vertex_visible[v],
                                    drawings.seeds[j], spix[v, j], sdepth[v, j], half, focal)
             matches.append((v, float(spix[v, j, 0]), float(spix[v, j, 1]), float(s)))
-        view_scores[v] = int((sim >= threshold).sum())
-        view_sims[v] = float(sim[sim >= threshold].sum())
+        view_scores[v] = int(ok.sum())
+        view_sims[v] = float(sim[ok].sum())
     seen = drawings.vertex_visible.sum(axis=0)
     weights = np.where(seen > 0, marked.sum(axis=0) / np.maximum(seen, 1), 0.0).astype(np.float32)
     best = int(np.lexsort((view_sims, view_scores))[-1])
     return ShapeLocalisation(weights, best, matches, view_scores)
 
 
-def cluster_filters(style_filters, cluster: int) -> np.ndarray:
-    """The HOG filters that discriminate `cluster`; all style filters if it has none of its own."""
+def cluster_filters(style_filters, cluster: int) -> tuple[np.ndarray, np.ndarray | None]:
+    """(the HOG filters that discriminate `cluster`, the other clusters' filters or None).
+
+    A cluster with no filter of its own falls back to all style filters with no contrast set.
+    """
     own = [f.hog for f in style_filters if f.cluster == cluster]
-    chosen = own or [f.hog for f in style_filters]
-    return np.asarray(chosen, np.float32) if chosen else np.zeros((0, 1), np.float32)
+    other = [f.hog for f in style_filters if f.cluster != cluster]
+    if not own:
+        own, other = [f.hog for f in style_filters], []
+    empty = np.zeros((0, 1), np.float32)
+    return (np.asarray(own, np.float32) if own else empty,
+            np.asarray(other, np.float32) if other else None)
 
 
 def face_weights(weights: np.ndarray, faces: np.ndarray) -> np.ndarray:

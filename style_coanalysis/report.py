@@ -110,10 +110,22 @@ def _summary_html(report: dict) -> str:
     rows = [("shapes", len(report["shapes"])), ("clusters", len(report["clusters"])),
             ("style filters", report.get("n_style_filters", 0))]
     for key, scores in report.get("scores", {}).items():
-        rows.append((f"scores vs {key}", ", ".join(f"{k} {v:.3f}" for k, v in scores.items())))
+        for sub, vals in _flat(scores, key):
+            rows.append((f"scores: {sub}", ", ".join(
+                f"{k} {v:.3f}" if isinstance(v, float) else f"{k} {v}" for k, v in vals.items())))
     rows += [(f"seconds: {k}", v) for k, v in report["seconds"].items() if "." not in k]
     return "<table>" + "".join(f"<tr><th align=left>{html.escape(str(a))}</th><td>"
                                f"{html.escape(str(b))}</td></tr>" for a, b in rows) + "</table>"
+
+
+def _flat(scores: dict, key: str):
+    """(label, {metric: value}) rows: nested score groups (localisation) become one row each."""
+    plain = {k: v for k, v in scores.items() if not isinstance(v, dict)}
+    if plain:
+        yield key, plain
+    for k, v in scores.items():
+        if isinstance(v, dict):
+            yield f"{key} {k}", v
 
 
 def _camera_centre(P: np.ndarray) -> np.ndarray:

@@ -193,3 +193,19 @@ def test_unknown_names_in_labels_csv(sample, tmp_path):
 def test_bad_cluster_count(sample, tmp_path):
     expect_refusal(["analyze", sample / "sample.blend", "--out", tmp_path / "o", "--clusters", "one"],
                    "--clusters")
+
+
+def test_folder_of_obj_files_gives_objects_with_results(sample, first_run, tmp_path):
+    """A folder input: each file one shape named by its stem; result.blend holds them all."""
+    out, _ = first_run
+    before = digest(sample / "meshes")
+    res = run_cmd("analyze", sample / "meshes", "--out", tmp_path, "--renderer", "lineart",
+                  "--jobs", 2, "--cache", out / "cache", "--rounds", 2)
+    assert res.returncode == 0, res.stderr[-3000:]
+    assert digest(sample / "meshes") == before
+    state = blend_state(tmp_path / "result.blend")
+    stems = {p.stem for p in (sample / "meshes").glob("*.obj")}
+    assert set(state["objects"]) == stems
+    assert all("style_weight" in o["groups"] for o in state["objects"].values())
+    rep = json.loads((tmp_path / "report.json").read_text())
+    assert {s["source"] for s in rep["shapes"]} == {str(p) for p in (sample / "meshes").glob("*.obj")}

@@ -38,7 +38,14 @@ def load_input(path: str, collection: str | None):
     if p.is_dir():
         if collection:
             raise InputError("--collection applies to a .blend INPUT, not to a folder")
-        return scene.import_mesh_files(p)
+        import bpy
+        bpy.ops.wm.read_factory_settings(use_empty=True)
+        meshes = scene.import_mesh_files(p)
+        # the shapes become objects of an empty scene: result.blend holds them with their results
+        names = scene.objects_from_meshes(meshes, "Shapes")
+        for m, name in zip(meshes, names):
+            m.name = name
+        return meshes
     if p.suffix.lower() == ".blend":
         return scene.meshes_from_blend(p, collection)
     raise InputError(f"'{path}' is neither a .blend file nor a folder of mesh files")

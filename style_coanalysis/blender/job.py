@@ -197,9 +197,10 @@ def run_steps(meshes: list[Mesh], options: JobOptions):
     for i, (m, d) in enumerate(zip(good, drawings)):
         yield ("localise", i, len(good))
         normal = normalise(m, options.up)
-        filters = localisation.cluster_filters(result.style_filters, int(result.clusters[i]))
-        loc = localisation.localise_shape(d, normal.vertices, filters, options.params.patch_size,
-                                          options.localisation.match_threshold, rig.focal_px)
+        own, others = localisation.cluster_filters(result.style_filters, int(result.clusters[i]))
+        loc = localisation.localise_shape(d, normal.vertices, own, options.params.patch_size,
+                                          options.localisation.match_threshold, rig.focal_px,
+                                          others=others)
         locs.append(loc)
         centre, radius = normalisation(m, options.up)
         given = bool(result.label_given[i])
@@ -267,13 +268,8 @@ def build_report(meshes, shapes, clusters, skipped, options, timings, result, lo
 
 
 def localisation_scores(meshes, locs, masks) -> dict:
-    """Precision / recall / IoU of faces with style weight > 0.5 against the true decorative faces."""
-    tp = fp = fn = 0
-    for m, loc, mask in zip(meshes, locs, masks):
-        pred = localisation.face_weights(loc.weights, m.faces) > 0.5
-        mask = np.asarray(mask, bool)
-        tp += int((pred & mask).sum())
-        fp += int((pred & ~mask).sum())
-        fn += int((~pred & mask).sum())
-    return {"precision": tp / max(tp + fp, 1), "recall": tp / max(tp + fn, 1),
-            "iou": tp / max(tp + fp + fn, 1)}
+    """Faces with style weight > 0.5 against the true decorative faces (metrics.region_scores)."""
+    from ..meshes import face_areas
+    preds = [localisation.face_weights(loc.weights, m.faces) > 0.5 for m, loc in zip(meshes, locs)]
+    areas = [face_areas(m.vertices, m.faces) for m in meshes]
+    return metrics.region_scores(preds, masks, areas)

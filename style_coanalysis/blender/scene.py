@@ -119,9 +119,13 @@ def import_mesh_file(path) -> Mesh:
         depsgraph = bpy.context.evaluated_depsgraph_get()
         parts = [mesh_from_object(bpy.data.objects[n], depsgraph) for n in new
                  if bpy.data.objects[n].type == "MESH"]
-        parts = [p for p in parts if len(p.faces)]
-        if not parts:
-            raise InputError(f"{path}: no mesh with faces in the file")
+        with_faces = [p for p in parts if len(p.faces)]
+        if not with_faces:
+            # not an import failure: the shape exists but cannot be analysed; the job skips it
+            # with a warning and lists it in the report
+            verts = np.concatenate([p.vertices for p in parts]) if parts else np.zeros((0, 3))
+            return Mesh(stem, verts, np.zeros((0, 3), np.int32), source=path)
+        parts = with_faces
         offsets = np.cumsum([0] + [len(p.vertices) for p in parts[:-1]])
         verts = np.concatenate([p.vertices for p in parts])
         faces = np.concatenate([p.faces + o for p, o in zip(parts, offsets)])
