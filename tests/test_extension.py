@@ -66,7 +66,13 @@ INSTALL = textwrap.dedent("""
     state["enabled"] = module in {m for m in bpy.context.preferences.addons.keys()}
     state["panel"] = hasattr(bpy.types, "VIEW3D_PT_style")
     state["operator"] = hasattr(bpy.types, "STYLE_OT_analyse")
-    import os
+    import io, os, contextlib
+    ext = sys.modules[module]
+    state["cli_registered"] = ext._cli_handle is not None
+    err = io.StringIO()
+    with contextlib.redirect_stderr(err):   # the handler Blender's `-c style_coanalysis` calls
+        state["cli_rc"] = ext.run_cli(["analyze", "/nonexistent/in.blend", "--out", sys.argv[2]])
+    state["cli_err"] = err.getvalue()
     local = os.path.join(bpy.utils.user_resource("EXTENSIONS"), ".local")
     state["wheels"] = sorted(p for p in ("sklearn", "scipy", "skimage") if any(
         os.path.isfile(os.path.join(r, p, "__init__.py")) for r, _, _ in os.walk(local)))
@@ -88,6 +94,9 @@ def test_installs_registers_and_unregisters_in_blender(linux_zip, tmp_path):
     state = json.loads(lines[-1][5:])
     assert state["install"] == ["FINISHED"]
     assert state["enabled"] and state["panel"] and state["operator"]
+    # the command line registered with Blender runs from the installed package (relative imports)
+    assert state["cli_registered"]
+    assert state["cli_rc"] == 2 and "/nonexistent/in.blend" in state["cli_err"]
     assert not state["panel_after"] and not state["operator_after"] and not state["enabled_after"]
     assert "Traceback" not in res.stderr, res.stderr[-2000:]
     # installed under the temporary user folder, not the developer's
