@@ -244,23 +244,156 @@ def must_cannot_from_triplets(triplets, n_samples=None):
     return pairs(T[:, [0, 1]]), pairs(T[:, [0, 2]])
 
 
+def must_link_components(must, n):
+    """Transitive closure of must-links: a component id per sample (0..G-1)."""
+    from scipy.sparse import coo_matrix
+    from scipy.sparse.csgraph import connected_components
+    must = np.asarray(must, dtype=np.int64).reshape(-1, 2)
+    g = coo_matrix((np.ones(len(must)), (must[:, 0], must[:, 1])), shape=(n, n))
+    return connected_components(g, directed=False)[1]
+
+
+def closed_constraints(must, cannot, n):
+    """Must-links closed transitively and cannot-links lifted to whole components.
+
+    Returns (comp, same, diff): comp the component id per sample, same/diff (n, n) bool matrices of
+    the implied must-link / cannot-link pairs (diagonal False). A cannot-link inside one
+    must-link component contradicts the must-links; it is dropped (``same`` wins).
+    """
+    comp = must_link_components(must, n)
+    same = comp[:, None] == comp[None, :]
+    np.fill_diagonal(same, False)
+    G = comp.max() + 1 if n else 0
+    cg = np.zeros((G, G), bool)
+    cannot = np.asarray(cannot, dtype=np.int64).reshape(-1, 2)
+    if len(cannot):
+        a, b = comp[cannot[:, 0]], comp[cannot[:, 1]]
+        ok = a != b
+        cg[a[ok], b[ok]] = True
+        cg[b[ok], a[ok]] = True
+    diff = cg[comp][:, comp]
+    return comp, same, diff
+
+
+def pair_metric(V, same, diff):
+    """Per-coordinate weights (to multiply V by) learned from must / cannot pairs.
+
+    Fisher ratio on pairs: mean squared difference over cannot-linked pairs divided by that over
+    must-linked pairs, per coordinate (coordinates brought to unit spread first); the weight is
+    sqrt(max(ratio - 1, 0)), so a coordinate that differs as much inside a style as across styles
+    (one that follows the object category, say) gets no say. Falls back to unit spread when there
+    are too few pairs of either kind.
+    """
+    sd = V.std(axis=0) + 1e-12
+    si, sj = np.nonzero(np.triu(same, 1))
+    di, dj = np.nonzero(np.triu(diff, 1))
+    if len(si) < 2 or len(di) < 2:
+        return 1.0 / sd
+    rng = np.random.RandomState(0)                 # cap the pair count: cost O(pairs * dims)
+    if len(si) > 20000:
+        k = rng.choice(len(si), 20000, replace=False); si, sj = si[k], sj[k]
+    if len(di) > 20000:
+        k = rng.choice(len(di), 20000, replace=False); di, dj = di[k], dj[k]
+    ds = (((V[si] - V[sj]) / sd) ** 2).mean(axis=0)
+    dd = (((V[di] - V[dj]) / sd) ** 2).mean(axis=0)
+    w = np.maximum(dd / (ds + 1e-12) - 1.0, 0.0)
+    if not np.any(w > 0):
+        return 1.0 / sd
+    return np.sqrt(w) / sd
+
+
+def _assign_components(score, comp, diff_comp, C):
+    """Labels per sample from per-sample cluster scores (n, C), one cluster per must-link
+    component, cannot-linked components in different clusters where possible (greedy, most
+    confident component first), and exactly C non-empty clusters when there are >= C components.
+    """
+    G = comp.max() + 1
+    S = np.zeros((G, C))
+    np.add.at(S, comp, score)
+    size = np.bincount(comp, minlength=G)
+    P = S / size[:, None]
+    srt = np.sort(P, axis=1)
+    margin = srt[:, -1] - (srt[:, -2] if C > 1 else 0.0)
+    order = np.lexsort((-margin, -size))            # big components first, then confident ones
+    lab = np.full(G, -1)
+    for g in order:
+        banned = set(lab[diff_comp[g] & (lab >= 0)].tolist())
+        choice = [c for c in np.argsort(-P[g]) if c not in banned]
+        lab[g] = choice[0] if choice else int(np.argmax(P[g]))
+    # exactly C non-empty clusters: give an empty cluster the component that prefers it most
+    # among those whose move breaks no cannot-link and does not empty another cluster
+    for c in range(C):
+        if np.any(lab == c) or G < C:
+            continue
+        counts = np.bincount(lab, weights=size, minlength=C)
+        best, gbest = -np.inf, None
+        for g in range(G):
+            if counts[lab[g]] - size[g] <= 0 or np.any(lab[diff_comp[g]] == c):
+                continue
+            gain = P[g, c] - P[g, lab[g]]
+            if gain > best:
+                best, gbest = gain, g
+        if gbest is not None:
+            lab[gbest] = c
+    return lab[comp]
+
+
 class TripletClustering(ClusterMixin, BaseEstimator):
     """Triplet-constrained clustering, paper eq. 3: A' = A + N_m - N_c ~ Y S Y^T, Y >= 0.
 
-    A is the cosine similarity of the fused features (rows L2-normalised), so its entries lie in
-    [0, 1] for non-negative features, the same scale as the 0/1 constraint indicators; a pair that
-    is both must- and cannot-linked cancels. A' has negative entries, so S is left free in sign
-    (semi-NMF): S is the least-squares solution given Y, and Y takes the multiplicative update that
-    splits the gradient into positive and negative parts (Ding, Li & Jordan). Y starts from k-means
-    on the leading eigenvectors of A' (constraints included), plus 0.2 everywhere so no cluster
-    is switched off. Labels are the row argmax of Y; ``membership_`` is Y with rows summing to one.
+    Steps (departures from a literal reading of the paper are marked *):
+
+    1. Each triplet (a, b, c) -> must-link (a, b), cannot-link (a, c).
+    2. * Must-links are closed transitively (connected components) and cannot-links lifted to
+       whole components: with 300 label-derived triplets on 120 shapes the closure turns 300
+       must-links into ~1,700 implied pairs (measured, bench_semisupervised.py).
+    3. * A is the cosine similarity of the fused features in a metric learned from the
+       constraints (:func:`pair_metric`, coordinates that differ as much inside must-linked
+       pairs as across cannot-linked ones are switched off). The paper's A = V^T V is the
+       special case with unit weights (``metric=False``).
+    4. A' = A + N_m - N_c with the closed constraint indicators (eq. 3).
+    5. * Y is initialised from a constrained spectral embedding (Kamvar et al. 2003: a local-
+       scaling kNN affinity of the weighted features with must-linked pairs set to 1 and cannot-
+       linked ones to 0, top-C eigenvectors, k-means) rather than from A' alone: sparse
+       constraints hardly move a dense similarity, they do move a sparse graph.
+    6. A' ~ Y S Y^T by semi-NMF multiplicative updates (S free in sign, A' has negative entries).
+    7. * Labels: the memberships Y summed over each must-link component, one cluster per
+       component, cannot-linked components kept apart greedily, and exactly C non-empty
+       clusters (a previous version could return fewer clusters than asked).
+    ``membership_`` is Y with rows summing to one.
     """
 
-    def __init__(self, n_clusters=2, random_state=None, max_iter=300, tol=1e-6):
+    def __init__(self, n_clusters=2, random_state=None, max_iter=300, tol=1e-6, metric=True,
+                 k_neighbors=7, similarity="graph"):
         self.n_clusters = n_clusters
         self.random_state = random_state
         self.max_iter = max_iter
         self.tol = tol
+        self.metric = metric
+        self.k_neighbors = k_neighbors
+        self.similarity = similarity
+
+    def _spectral_init(self, X, same, diff, C, rng):
+        n = X.shape[0]
+        k = min(int(self.k_neighbors), n - 1)
+        D2 = pairwise_distances(X, metric="sqeuclidean")
+        sig = np.sqrt(np.maximum(np.sort(D2, axis=1)[:, min(k, n - 1)], 1e-24))
+        Aff = np.exp(-D2 / np.outer(sig, sig))
+        # keep a symmetric kNN graph
+        nn = np.argsort(D2, axis=1)[:, 1:k + 1]
+        mask = np.zeros((n, n), bool)
+        mask[np.repeat(np.arange(n), k), nn.ravel()] = True
+        mask |= mask.T
+        Aff = np.where(mask, Aff, 0.0)
+        Aff[same] = 1.0
+        Aff[diff] = 0.0
+        np.fill_diagonal(Aff, 0.0)
+        d = Aff.sum(axis=1)
+        dinv = 1.0 / np.sqrt(np.maximum(d, 1e-12))
+        L = Aff * dinv[:, None] * dinv[None, :]
+        self.graph_ = L
+        w, U = eigh(L, subset_by_index=[n - C, n - 1])
+        return KMeans(C, n_init=10, random_state=rng).fit_predict(normalize(U))
 
     def fit(self, V, triplets=None):
         V = _check_features(V, "V")
@@ -269,22 +402,34 @@ class TripletClustering(ClusterMixin, BaseEstimator):
         if not 1 <= C <= n:
             raise ValueError(f"n_clusters must be in [1, {n}], got {self.n_clusters}")
         rng = check_random_state(self.random_state)
-        Vn = normalize(V)
-        A = Vn @ Vn.T
         if triplets is None:
             triplets = np.zeros((0, 3), dtype=np.int64)
         must, cannot = must_cannot_from_triplets(triplets, n)
-        N = np.zeros((n, n))
-        N[must[:, 0], must[:, 1]] += 1.0
-        N[cannot[:, 0], cannot[:, 1]] -= 1.0
-        N = N + N.T
-        Ap = A + N
-        self.similarity_ = Ap
+        comp, same, diff = closed_constraints(must, cannot, n)
         self.n_must_links_, self.n_cannot_links_ = len(must), len(cannot)
-
-        w, U = eigh(Ap, subset_by_index=[n - C, n - 1])
-        lab0 = KMeans(C, n_init=10, random_state=rng).fit_predict(normalize(U)) if C > 1 \
-            else np.zeros(n, dtype=int)
+        self.n_implied_must_links_ = int(np.triu(same, 1).sum())
+        self.n_implied_cannot_links_ = int(np.triu(diff, 1).sum())
+        self.components_ = comp
+        if self.metric:
+            sw = pair_metric(V, same, diff)
+            X = (V - V.mean(axis=0)) * sw                # the metric acts on deviations
+            self.metric_weights_ = sw
+        else:
+            X = V
+            self.metric_weights_ = None
+        if C > 1:
+            lab0 = self._spectral_init(X, same, diff, C, rng)
+        else:
+            lab0 = np.zeros(n, dtype=int)
+            self.graph_ = None
+        if self.similarity == "graph" and self.graph_ is not None:
+            A = self.graph_
+        else:
+            Xn = normalize(X)
+            A = Xn @ Xn.T
+        Ap = A + same.astype(float) - diff.astype(float)
+        self.similarity_ = Ap
+        self.init_labels_ = lab0
         Y = np.full((n, C), 0.2)
         Y[np.arange(n), lab0] += 1.0
 
@@ -304,14 +449,33 @@ class TripletClustering(ClusterMixin, BaseEstimator):
             YSYYS = Y @ (S @ (Y.T @ Y) @ S)
             num = np.maximum(AYS, 0) + np.maximum(-YSYYS, 0)
             den = np.maximum(-AYS, 0) + np.maximum(YSYYS, 0)
-            Y = Y * np.sqrt((num + eps) / (den + eps))
-            S = s_of(Y)
-            history.append(obj(Y, S))
+            ratio = np.sqrt((num + eps) / (den + eps))
+            # the symmetric tri-factor update has no descent guarantee: damp it (geometric
+            # interpolation towards the current Y) until the objective does not rise, else stop
+            for t in (1.0, 0.5, 0.25, 0.125, 0.0625):
+                Yn = Y * ratio ** t
+                Sn = s_of(Yn)
+                fn = obj(Yn, Sn)
+                if fn <= history[-1]:
+                    break
+            else:
+                break
+            Y, S = Yn, Sn
+            history.append(fn)
             if abs(history[-2] - history[-1]) <= self.tol * max(history[-2], eps):
                 break
         self.S_ = S
-        self.membership_ = Y / np.maximum(Y.sum(axis=1, keepdims=True), eps)
-        self.labels_ = np.argmax(Y, axis=1)
+        memb = Y / np.maximum(Y.sum(axis=1, keepdims=True), eps)
+        self.membership_ = memb
+        G = comp.max() + 1
+        dc = np.zeros((G, G), bool)
+        ii, jj = np.nonzero(diff)
+        dc[comp[ii], comp[jj]] = True
+        # the vote adds the constrained spectral assignment to the memberships: measured on the
+        # sample collection with 100 label-derived triplets, SNMF alone 0.86 purity, spectral
+        # start 0.95, both 0.95 (3 seeds; bench_semisupervised.py)
+        score = memb + np.eye(C)[lab0]
+        self.labels_ = _assign_components(score, comp, dc, C) if C > 1 else np.zeros(n, int)
         self.objective_history_ = np.array(history)
         self.n_iter_ = n_iter
         return self
@@ -323,9 +487,16 @@ class TripletClustering(ClusterMixin, BaseEstimator):
 # ---------------------------------------------------------------------------------------------
 # style distance
 
-def style_distance(V):
-    """Pairwise style distance: cosine distance of the L2-normalised fused features (n x n)."""
+def style_distance(V, weights=None):
+    """Pairwise style distance: cosine distance of the L2-normalised fused features (n x n).
+
+    ``weights`` (optional, one per coordinate, e.g. ``TripletClustering.metric_weights_``): the
+    distance is then taken between the weighted deviations from the mean, the metric learned from
+    the constraints.
+    """
     V = _check_features(V, "V")
+    if weights is not None:
+        V = (V - V.mean(axis=0)) * np.asarray(weights, dtype=np.float64)[None, :]
     Vn = normalize(V)
     D = 1.0 - Vn @ Vn.T
     np.fill_diagonal(D, 0.0)

@@ -31,6 +31,17 @@ Choices that differ from a literal reading of the paper, and why:
   them. gamma is expressed as the percentage by which an average-strength row of W is shrunk
   (gamma' = gamma/100 * 2 beta' n_labelled/sqrt(C) * rms(V)), so gamma = 10 trims rows of W that
   are weaker than about a tenth of the average, whatever the data scale.
+* gamma calibration (changed): gamma' = gamma/1000 * ... (was /100). With /100, gamma = 10 at
+  beta >= 0.03 shrank W towards zero and dragged the labelled factors with it: prediction accuracy
+  on the sample collection (20 % labels, 3 seeds) fell to chance, 0.28-0.31; with gamma = 0 it was
+  0.57 and with the new scale gamma = 10 gives the same as the old gamma = 1 (0.56).
+* Prediction (changed): V_u ~ W Y_u by NNLS is solved in a metric learned from the labelled pairs
+  (:func:`label_metric`): 0.57 vs 0.42-0.46 accuracy on the unlabelled shapes in the plain metric.
+* ``unlabelled_weight`` > 0 (off by default) also ties the unlabelled shapes, beta' rho
+  ||V_u - W Y_u||^2 with Y_u on the simplex (projected-gradient descent steps), so the labels
+  reshape every shape's factors. Measured on the sample collection it is at chance (0.24-0.26
+  accuracy for rho in 0.3, 1): the class bases, averaged over categories, are nearly equal in the
+  category-dominated factor space, so memberships drift. Kept for tests and future features.
 * lam acts on unit-energy views, so per-view errors are below one and lam = 20 gives near-uniform
   view weights; a smaller lam (e.g. 0.05) lets the weights favour the better-explained views.
 """
@@ -44,6 +55,20 @@ from sklearn.utils import check_random_state
 from .scaling import SCALINGS, scale_views
 
 
+def project_simplex_rows(M):
+    """Row-wise Euclidean projection of a matrix onto the probability simplex."""
+    M = np.asarray(M, dtype=np.float64)
+    if M.size == 0:
+        return M.copy()
+    U = -np.sort(-M, axis=1)
+    css = np.cumsum(U, axis=1) - 1.0
+    ind = np.arange(1, M.shape[1] + 1)
+    cond = U - css / ind > 0
+    rho = M.shape[1] - 1 - np.argmax(cond[:, ::-1], axis=1)
+    theta = css[np.arange(M.shape[0]), rho] / (rho + 1.0)
+    return np.maximum(M - theta[:, None], 0.0)
+
+
 def project_simplex(v):
     """Euclidean projection of a vector onto the probability simplex {x >= 0, sum x = 1}."""
     v = np.asarray(v, dtype=np.float64)
@@ -55,6 +80,33 @@ def project_simplex(v):
     return np.maximum(v - theta, 0.0)
 
 
+def label_metric(V, labels, labelled):
+    """Per-coordinate weights (sqrt, to multiply V by) from the labelled shapes' pairs.
+
+    For every fused coordinate, the mean squared difference over pairs of labelled shapes with
+    different labels divided by that over pairs with the same label (a Fisher ratio on pairs);
+    weight = max(ratio - 1, 0), so a coordinate that varies as much within a class as across
+    classes (e.g. one that follows the object category) gets no say. Coordinates are first brought
+    to unit spread. Measured on the sample collection (20 % labels, 3 seeds): NNLS prediction of
+    V_u ~ W Y_u in this metric 0.57 accuracy vs 0.42-0.46 in the plain metric.
+    """
+    idx = np.flatnonzero(labelled)
+    sd = V.std(axis=0) + 1e-12
+    if idx.size < 2:
+        return 1.0 / sd
+    a, b = np.triu_indices(idx.size, 1)
+    a, b = idx[a], idx[b]
+    same = labels[a] == labels[b]
+    if not same.any() or same.all():
+        return 1.0 / sd
+    d2 = ((V[a] - V[b]) / sd) ** 2
+    ratio = d2[~same].mean(axis=0) / (d2[same].mean(axis=0) + 1e-12)
+    w = np.maximum(ratio - 1.0, 0.0)
+    if not np.any(w > 0):
+        return 1.0 / sd
+    return np.sqrt(w) / sd
+
+
 class PSLF(BaseEstimator):
     """Multi-view NMF with partially shared factors and optional label constraints.
 
@@ -63,7 +115,8 @@ class PSLF(BaseEstimator):
     """
 
     def __init__(self, n_components=20, eta=0.2, lam=20.0, beta=0.05, gamma=10.0,
-                 max_iter=300, tol=1e-4, scaling="auto", random_state=None):
+                 max_iter=300, tol=1e-4, scaling="auto", random_state=None,
+                 unlabelled_weight=0.0):
         self.n_components = n_components
         self.eta = eta
         self.lam = lam
@@ -73,6 +126,7 @@ class PSLF(BaseEstimator):
         self.tol = tol
         self.scaling = scaling
         self.random_state = random_state
+        self.unlabelled_weight = unlabelled_weight
 
     # ------------------------------------------------------------------ helpers
     def _check_params(self):
@@ -80,7 +134,7 @@ class PSLF(BaseEstimator):
             raise ValueError(f"n_components must be >= 1, got {self.n_components}")
         if not 0.0 <= self.eta <= 1.0:
             raise ValueError(f"eta must be in [0, 1], got {self.eta}")
-        for name in ("lam", "beta", "gamma", "tol"):
+        for name in ("lam", "beta", "gamma", "tol", "unlabelled_weight"):
             if getattr(self, name) < 0:
                 raise ValueError(f"{name} must be >= 0, got {getattr(self, name)}")
         if int(self.max_iter) < 1:
@@ -115,8 +169,7 @@ class PSLF(BaseEstimator):
         """F given the per-view errors e (which do not depend on pi)."""
         f = float(pi @ e + self.lam * pi @ pi)
         if W is not None:
-            R = V[self._lab] - T[self._lab]
-            f += self._beta_eff * float(np.sum(R ** 2))
+            f += float(np.sum(self._b[:, None] * (V - T) ** 2))
             f += self._gamma_eff * float(np.sum(np.linalg.norm(W, axis=1)))
         return f
 
@@ -175,16 +228,38 @@ class PSLF(BaseEstimator):
         return project_simplex(-e / (2.0 * self.lam))
 
     def _update_W(self, V, W, n_steps=3):
-        """Majorise-minimise steps for beta'||V_l - Y W^T||^2 + gamma'||W||_{2,1}, W >= 0."""
-        S = V.T @ self._Y          # D x C class sums of labelled rows
-        counts = self._Y.sum(axis=0)
+        """Majorise-minimise steps for sum_i b_i ||v_i - W y_i||^2 + gamma'||W||_{2,1}, W >= 0.
+
+        The l2,1 norm is majorised by its quadratic bound at the current W and the quadratic by
+        the Lee-Seung auxiliary function, giving the multiplicative update
+        W <- W * (V^T B Y) / (W Y^T B Y + reg W); it is exact when Y is one-hot (Y^T B Y diagonal)
+        and a descent step otherwise.
+        """
+        Yb = self._Y * self._b[:, None]
+        S = V.T @ Yb                       # D x C weighted class sums
+        G = self._Y.T @ Yb                 # C x C
+        eps = np.finfo(float).tiny
         for _ in range(n_steps):
             rn = np.linalg.norm(W, axis=1, keepdims=True)
-            with np.errstate(divide="ignore"):
-                reg = np.where(rn > 0, self._gamma_eff / (2.0 * rn), np.inf)
-            W = np.where(rn > 0, self._beta_eff * S / (self._beta_eff * counts[None, :] + reg),
-                         0.0)
+            with np.errstate(divide="ignore", invalid="ignore"):
+                reg = np.where(rn > 0, self._gamma_eff / (2.0 * rn), 0.0)
+                W = np.where(rn > 0, W * S / np.maximum(W @ G + reg * W, eps), 0.0)
         return W
+
+    def _update_Yu(self, V, W, n_steps=10):
+        """Projected-gradient steps (step 1/L) for the memberships of the unlabelled shapes:
+        min ||v_i - W y_i||^2 with y_i on the simplex (the paper's V_u = W Y_u). Each step from the
+        current point is a descent step."""
+        u = ~self._lab
+        if not u.any() or self.unlabelled_weight == 0:
+            return
+        WtW = W.T @ W
+        L = 2.0 * max(np.linalg.eigvalsh(WtW)[-1], np.finfo(float).tiny)
+        VW = V[u] @ W
+        Yu = self._Y[u]
+        for _ in range(n_steps):
+            Yu = project_simplex_rows(Yu - (2.0 / L) * (Yu @ WtW - VW))
+        self._Y[u] = Yu
 
     # ------------------------------------------------------------------ API
     def fit(self, views, y=None):
@@ -212,13 +287,15 @@ class PSLF(BaseEstimator):
             self.classes_ = np.unique(y[self._lab])
             C = self.classes_.size
             idx = np.searchsorted(self.classes_, y[self._lab])
-            self._Y = np.zeros((n, C))
+            self._Y = np.full((n, C), 1.0 / C)          # unlabelled: uniform membership
+            self._Y[self._lab] = 0.0
             self._Y[np.flatnonzero(self._lab), idx] = 1.0
             n_l = int(self._lab.sum())
             self._beta_eff = self.beta * n / n_l
             rms_v = np.sqrt(P / (n * D))      # typical entry of V for unit-energy views
-            self._gamma_eff = (self.gamma / 100.0) * 2.0 * self._beta_eff * n_l / np.sqrt(C) * rms_v
-            b = self._beta_eff * self._lab.astype(np.float64)
+            self._gamma_eff = (self.gamma / 1000.0) * 2.0 * self._beta_eff * n_l / np.sqrt(C) * rms_v
+            b = self._beta_eff * np.where(self._lab, 1.0, float(self.unlabelled_weight))
+            self._b = b
         else:
             self.classes_ = None
             b = np.zeros(n)
@@ -230,7 +307,11 @@ class PSLF(BaseEstimator):
             H.append(Hp / np.linalg.norm(Hp, axis=1, keepdims=True))
         V = rng.uniform(size=(n, D)) * np.sqrt(1.0 / (n * K))
         pi = np.full(P, 1.0 / P)
-        W = self._update_W(V, V.T @ self._Y / np.maximum(self._Y.sum(0), 1)) if supervised else None
+        if supervised:       # class bases start at the class means of the random factors
+            Yl = self._Y * self._lab[:, None]
+            W = V.T @ Yl / np.maximum(Yl.sum(0), 1)
+        else:
+            W = None
         T = self._Y @ W.T if supervised else np.zeros((n, D))
 
         f = self._objective(self._view_errors(X, V, H), V, pi, W, T)
@@ -241,6 +322,7 @@ class PSLF(BaseEstimator):
             self._update_V(X, V, H, pi, T, b)
             if supervised:
                 W = self._update_W(V, W)
+                self._update_Yu(V, W)
                 T = self._Y @ W.T
             e = self._view_errors(X, V, H)
             pi = self._update_pi(e)
@@ -269,13 +351,18 @@ class PSLF(BaseEstimator):
         return V
 
     def _predict_labels(self, V, y):
-        """Y_u from V_u ~ W Y_u by NNLS per shape, normalised to a distribution (eq. 2)."""
+        """Y_u: the learned memberships (V_u ~ W Y_u, eq. 2); without the transductive term, by
+        NNLS per shape, normalised to a distribution."""
         n, C = V.shape[0], self.classes_.size
         dist = self._Y.copy()
-        for i in np.flatnonzero(~self._lab):
-            coef, _ = nnls(self.W_, V[i])
-            s = coef.sum()
-            dist[i] = coef / s if s > 0 else np.full(C, 1.0 / C)
+        if self.unlabelled_weight == 0:
+            sw = label_metric(V, self._Y.argmax(axis=1), self._lab)
+            self.label_metric_ = sw
+            Ww = self.W_ * sw[:, None]
+            for i in np.flatnonzero(~self._lab):
+                coef, _ = nnls(Ww, V[i] * sw)
+                s = coef.sum()
+                dist[i] = coef / s if s > 0 else np.full(C, 1.0 / C)
         self.label_distribution_ = dist
         pred = self.classes_[np.argmax(dist, axis=1)]
         pred[self._lab] = y[self._lab]

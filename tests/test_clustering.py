@@ -112,3 +112,24 @@ def test_style_distance_and_triplet_prediction():
     assert pred.tolist() == [True, False, True]
     with pytest.raises(ValueError, match="indices"):
         predict_triplets(D, np.array([[0, 1, 9]]))
+
+
+def test_sparse_triplets_propagate_and_give_exactly_c_clusters():
+    """Few triplets: the must-link closure and the constrained graph carry them to the whole
+    collection; every must-link component ends in one cluster; C clusters, none empty."""
+    from style_coanalysis.clustering import closed_constraints
+    pur, unsup = [], []
+    for seed in range(3):
+        V, cat, sty = competing_features(seed)
+        T = style_triplets(sty, sty.size // 2, np.random.RandomState(seed))
+        m = TripletClustering(3, random_state=0).fit(V, T)
+        assert len(np.unique(m.labels_)) == 3
+        comp = m.components_
+        for g in np.unique(comp):
+            assert len(np.unique(m.labels_[comp == g])) == 1
+        assert m.n_implied_must_links_ >= m.n_must_links_
+        pur.append(purity(sty, m.labels_))
+        unsup.append(purity(sty, TripletClustering(3, random_state=0).fit_predict(V, None)))
+    assert np.mean(pur) > 0.9 and np.mean(pur) > np.mean(unsup) + 0.3, (pur, unsup)
+    comp, same, diff = closed_constraints(np.array([[0, 1], [1, 2]]), np.array([[0, 3], [1, 2]]), 5)
+    assert same[0, 2] and diff[2, 3] and not diff[1, 2]     # closure; contradicting pair dropped

@@ -69,8 +69,9 @@ def test_planted_clusters_recovered(seed):
 def test_objective_never_increases_unsupervised_and_supervised():
     views, cat, sty = competing_views(0)
     y = np.where(np.random.RandomState(0).rand(150) < 0.2, sty, -1)
-    for yy, lam in ((None, 20.0), (y, 20.0), (y, 0.01)):
-        m = PSLF(n_components=8, lam=lam, tol=1e-7, max_iter=80, random_state=1)
+    for yy, lam, rho in ((None, 20.0, 0.0), (y, 20.0, 0.0), (y, 0.01, 0.0), (y, 20.0, 1.0)):
+        m = PSLF(n_components=8, lam=lam, tol=1e-7, max_iter=80, random_state=1,
+                 unlabelled_weight=rho)
         m.fit_transform(views, yy)
         h = m.objective_history_
         assert len(h) == m.n_iter_ + 1
