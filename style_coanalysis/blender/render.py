@@ -376,6 +376,15 @@ def ray_visibility(tree: BVHTree, rig: Rig, points: np.ndarray,
 
 
 # ---------------------------------------------------------------- entry point
+def draw_lines(mesh: Mesh, settings: DrawingSettings, threads: int = 0) -> np.ndarray:
+    """The (V, H, W) ink images alone, with the chosen renderer (no seeds, no visibility)."""
+    rig = rig_for(settings)
+    with TempScene(mesh, rig) as ts:
+        if settings.renderer == "freestyle":
+            return _render_freestyle(ts, settings, threads)
+        return _render_lineart(ts, settings, rig)
+
+
 def draw_shape(mesh: Mesh, settings: DrawingSettings, threads: int = 0) -> ShapeDrawings:
     """Drawings, seeds and visibility of an already normalised mesh (`meshes.normalise`).
 
@@ -396,11 +405,7 @@ def draw_shape(mesh: Mesh, settings: DrawingSettings, threads: int = 0) -> Shape
     seed_visible = ray_visibility(tree, rig, seeds, own_face=seed_faces)
     vertex_visible = ray_visibility(tree, rig, mesh.vertices, faces=mesh.faces)
     seed_pixels, _ = project(rig.matrices(), seeds)
-    with TempScene(mesh, rig) as ts:
-        if settings.renderer == "freestyle":
-            images = _render_freestyle(ts, settings, threads)
-        else:
-            images = _render_lineart(ts, settings, rig)
+    images = draw_lines(mesh, settings, threads)
     return ShapeDrawings(
         name=mesh.name, images=images, cameras=rig.matrices(), seeds=seeds, seed_faces=seed_faces,
         seed_visible=seed_visible, seed_pixels=seed_pixels.astype(np.float32),
