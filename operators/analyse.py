@@ -14,6 +14,7 @@ import bpy
 from ..style_coanalysis.blender import properties, writeback
 from ..style_coanalysis.meshes import InputError
 from ..style_coanalysis.params import AnalysisParams
+from ..style_coanalysis.progress import Cancelled
 
 STEP_BUDGET_S = 0.1     # time spent in the generator per TIMER event before yielding to the UI
 
@@ -187,7 +188,9 @@ class STYLE_OT_analyse(bpy.types.Operator):
         return True
 
     def _fail(self, exc):
-        if isinstance(exc, InputError):
+        if isinstance(exc, Cancelled):
+            self.report({"WARNING"}, "Style analysis cancelled: the scene is unchanged")
+        elif isinstance(exc, InputError):
             self.report({"ERROR"}, str(exc))
         else:
             traceback.print_exc()

@@ -41,6 +41,7 @@ class JobOptions:
     labels: dict | None = None          # name -> style
     triplets: list | None = None        # (a, b, c): a closer in style to b than to c
     n_seeds: int = 30                   # seeds per shape for the analysis (paper 4.1)
+    cancel: object = None               # optional callable -> bool, polled at every step
 
     def drawing_settings(self) -> DrawingSettings:
         # localisation uses three times as many seeds; seeds come in farthest-point order, so the
@@ -126,6 +127,20 @@ def _in_thread(fn, progress_box: list, cancel_flag: threading.Event):
 
 def run_steps(meshes: list[Mesh], options: JobOptions):
     """Generator: yields (stage, done, total); returns a JobResult. Raises InputError, Cancelled."""
+    steps = _run_steps(meshes, options)
+    try:
+        for step in steps:
+            if isinstance(step, JobResult):
+                return step
+            if options.cancel is not None and options.cancel():
+                raise Cancelled(f"cancelled during '{step[0]}'")
+            yield step
+    finally:
+        steps.close()   # a closed or cancelled run stops its worker thread and processes now
+
+
+def _run_steps(meshes: list[Mesh], options: JobOptions):
+    """run_steps' body: yields progress steps, then the JobResult itself as its last item."""
     t_start = time.perf_counter()
     timings: dict[str, float] = {}
     skipped: dict[str, str] = {}
@@ -148,6 +163,10 @@ def run_steps(meshes: list[Mesh], options: JobOptions):
     settings = options.drawing_settings()
     t0 = time.perf_counter()
     cancel_flag = threading.Event()
+    user_cancel = options.cancel or (lambda: False)
+
+    def stop() -> bool:
+        return cancel_flag.is_set() or bool(user_cancel())
     box = [("render", 0, len(good))]
 
     def progress(stage, done, total):
@@ -163,7 +182,7 @@ def run_steps(meshes: list[Mesh], options: JobOptions):
     else:
         drawings, bad = yield from _in_thread(
             lambda: batch.draw_collection(good, settings, options.cache_dir, jobs=options.jobs,
-                                          progress=progress, cancel=cancel_flag.is_set),
+                                          progress=progress, cancel=stop),
             box, cancel_flag)
         skipped.update(dict(bad))
     timings["render"] = time.perf_counter() - t0
@@ -183,7 +202,7 @@ def run_steps(meshes: list[Mesh], options: JobOptions):
     result = yield from _in_thread(
         lambda: pipeline.analyse(analysis_drawings, options.params, labels=options.labels,
                                  triplets=options.triplets, progress=progress,
-                                 cancel=cancel_flag.is_set),
+                                 cancel=stop),
         box, cancel_flag)
     timings["analyse"] = time.perf_counter() - t0
     for k, v in (result.timings or {}).items():
@@ -223,7 +242,7 @@ def run_steps(meshes: list[Mesh], options: JobOptions):
         clusters.append({"id": c, "size": len(members), "members": members, "label": label})
     report = build_report(good, shapes, clusters, skipped, options, timings, result, locs)
     yield ("done", len(good), len(good))
-    return JobResult(shapes, clusters, sorted(skipped.items()), report, result, drawings, locs)
+    yield JobResult(shapes, clusters, sorted(skipped.items()), report, result, drawings, locs)
 
 
 def seed_subset(d, n: int):
