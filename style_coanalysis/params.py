@@ -31,8 +31,13 @@ class DrawingSettings:
 class AnalysisParams:
     """The global analysis (paper sections 4.1-4.5) with the paper's parameter values."""
 
-    patch_size: int = 48                 # pixels, square patch around a visible seed
-    n_representatives: int = 50          # k-means centres per view
+    patch_size: int = 24                 # pixels, style patches/filters (paper: 48; see pipeline)
+    n_representatives: int = 50          # k-means centres of the layout (structure) dictionary
+    n_words: int = 200                   # k-means centres of the style dictionary (all views)
+    structure_patch_size: int = 48       # pixels, layout patches used to find structural neighbours
+    structure_neighbours: float = 1 / 6  # share of the collection whose mean style words cancel
+    n_style_dims: int = 10               # principal directions of the style residual kept
+    min_filters: int = 5                 # reselection keeps at least this many filters
     n_clusters: int | None = None        # None: chosen automatically (self-tuning spectral)
     n_components: int = 20               # K latent factors per view in PSLF
     eta: float = 0.2                     # Kc / K, the shared proportion of factors

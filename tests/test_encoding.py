@@ -2,7 +2,7 @@
 import numpy as np
 
 from style_coanalysis.encoding import (FilterBank, build_filter_bank, correlate_pooled, encode,
-                                       representatives, view_features)
+                                       representatives, unit_rows, view_features)
 from style_coanalysis.features import hog_images, patch_descriptors
 
 
@@ -93,3 +93,41 @@ def test_encoding_is_5k_per_view_and_vectorised_over_shapes():
     # the batched encoding equals encoding one shape at a time
     one = np.concatenate([encode(maps[i:i + 1], bank, (200, 200)) for i in range(n)])
     np.testing.assert_allclose(one, pooled, atol=1e-5)
+
+
+def test_word_counts_assign_each_inked_window_to_its_best_filter():
+    from style_coanalysis.encoding import frequency_features, word_counts
+    rng = np.random.default_rng(0)
+    maps = rng.random((2, 3, 6, 6, 36)).astype(np.float32)
+    maps[1, :, :3] = 0.0                              # shape 1: top half blank
+    filters = np.stack([maps[0, 0, :2, :2], maps[0, 1, 3:5, 1:3]])
+    counts = word_counts(maps, filters)
+    assert counts.shape == (2, 3, 2)
+    assert counts[0].sum() == 3 * 25                  # every window of a fully inked map counts
+    assert counts[1].sum() < counts[0].sum()          # blank windows count for nothing
+    # a window equal to a filter is assigned to it (cosine 1 beats any other)
+    one = word_counts(maps[:1, :1, :2, :2], filters)
+    assert one[0, 0].tolist() == [1.0, 0.0]
+    f = frequency_features(counts)
+    assert f.shape == (2, 2) and np.allclose((f ** 2).sum(axis=1), 1.0)
+
+
+def test_shared_bank_pools_views_and_keeps_real_patches():
+    from style_coanalysis.encoding import shared_bank
+    rng = np.random.default_rng(5)
+    images = np.zeros((6, 200, 200), np.float32)
+    for i in range(6):
+        for _ in range(4):
+            x, y = rng.integers(30, 170, 2)
+            _stamp(images[i], _motif(["ring", "cross", "bars"][i % 3]), x, y)
+    maps = hog_images(images).reshape(3, 2, 24, 24, -1)
+    centres = rng.integers(30, 170, (40, 2)).astype(np.float32)
+    shape, view = rng.integers(0, 3, 40), rng.integers(0, 2, 40)
+    bank = shared_bank(maps, shape, view, np.arange(len(shape)), centres, 48, k=5, random_state=0)
+    assert 0 < len(bank) <= 5
+    desc, _ = patch_descriptors(maps.reshape(-1, *maps.shape[2:]),
+                                shape * maps.shape[1] + view, centres, 48)
+    for f in range(len(bank)):          # each filter is a patch of its recorded source
+        i = np.flatnonzero((shape == bank.shape[f]) & (view == bank.view[f])
+                           & np.all(centres == bank.pixel[f], axis=1))
+        assert len(i) and np.allclose(unit_rows(desc[i[:1]]).reshape(bank.hog[f].shape), bank.hog[f])

@@ -3,6 +3,7 @@ import numpy as np
 import pytest
 from synthetic import STYLES, make_collection, purity
 
+from style_coanalysis.features import patch_blocks
 from style_coanalysis.meshes import InputError
 from style_coanalysis.params import AnalysisParams
 from style_coanalysis.pipeline import AnalysisResult, analyse, style_similarity
@@ -58,7 +59,8 @@ def test_unsupervised_finds_style_above_chance(collection, unsupervised):
     # the final filters: records consistent with the response array
     f = len(result.style_filters)
     assert 0 < f and result.responses.shape == (n, 4, f)
-    assert all(0 <= sf.cluster < 3 and sf.hog.shape == (5, 5, 36) for sf in result.style_filters)
+    nb = patch_blocks(PARAMS.patch_size)      # comparable with localisation's patch descriptors
+    assert all(0 <= sf.cluster < 3 and sf.hog.shape == (nb, nb, 36) for sf in result.style_filters)
     assert result.rounds[0]["n_filters"] > min(r["n_selected"] for r in result.rounds)  # selected
     for stage in ("patches", "hog", "encode", "fuse", "cluster", "reselect"):
         assert stage in stages and stage in result.timings
@@ -124,3 +126,23 @@ def test_cancel_and_bad_constraints_stop_before_work(collection):
         a, b, c = (d.name for d in drawings[:3])
         analyse(drawings, PARAMS, triplets=[(a, b, c), (a, c, b)])
     assert calls == []                                   # refused before any stage ran
+
+
+def test_structure_residual_cancels_what_structural_neighbours_share():
+    from style_coanalysis.pipeline import structure_residual, style_space
+    rng = np.random.default_rng(0)
+    n = 60
+    group = np.repeat(np.arange(3), 20)                      # structure: 3 builds
+    style = np.tile(np.arange(2), 30)                        # style: crosses the builds
+    structure = np.eye(3)[group] + 0.05 * rng.random((n, 3))
+    words = 3.0 * np.eye(3)[group] @ rng.random((3, 8))      # build words, strong
+    words[:, :2] += 0.5 * np.eye(2)[style]                   # ornament words, weak
+    words += 0.05 * rng.random(words.shape)
+    r = structure_residual(words, structure, 1 / 6)
+    assert np.abs(r[:, 2:]).mean() < 0.2 * np.abs(words[:, 2:] - words[:, 2:].mean(0)).mean()
+    sp = style_space(r, 2)
+    from sklearn.cluster import KMeans
+    lab = KMeans(2, n_init=5, random_state=0).fit_predict(sp)
+    assert purity(lab, style) == 1.0
+    lab_raw = KMeans(2, n_init=5, random_state=0).fit_predict(words)
+    assert purity(lab_raw, style) < 0.8                      # raw words follow the builds
