@@ -227,36 +227,47 @@ def shared_bank(view_maps: np.ndarray, shape: np.ndarray, view: np.ndarray, seed
                       np.asarray(seed, np.int64)[pick], np.asarray(centre, np.float32)[pick])
 
 
-def word_counts(view_maps: np.ndarray, filters: np.ndarray, ink: float = 0.5,
-                chunk_values: int = 12_000_000) -> np.ndarray:
+def word_assignments(maps: np.ndarray, filters: np.ndarray, ink: float = 0.5):
+    """One shape's windows against the dictionary: best word, its cosine, and which are inked.
+
+    maps: (V, by, bx, C) the shape's view maps; filters: (K, nb, nb, C). Returns three
+    (V, oy, ox) arrays. A window counts as inked when its norm is above `ink` times the median
+    norm of the shape's non-empty windows (windows that only clip a line's end or hold stray
+    gradient would otherwise be assigned too). Used for the encoding (word counts) and for
+    finding where on a drawing the style words are (localisation).
+    """
+    maps = np.asarray(maps, np.float32)
+    v, by, bx, c = maps.shape
+    k, nb = len(filters), filters.shape[1]
+    oy, ox = by - nb + 1, bx - nb + 1
+    if k == 0 or oy <= 0 or ox <= 0:
+        z = np.zeros((v, max(oy, 0), max(ox, 0)))
+        return z.astype(np.int64), z, z.astype(bool)
+    fmat = unit_rows(np.asarray(filters, np.float32).transpose(0, 3, 1, 2)).T
+    cols = sliding_window_view(maps, (nb, nb), axis=(1, 2)).reshape(-1, c * nb * nb)
+    norm = np.sqrt(np.einsum("ij,ij->i", cols, cols))
+    scores = cols @ fmat
+    best = scores.argmax(axis=1)
+    sim = scores[np.arange(len(best)), best] / np.maximum(norm, EPS)
+    nz = norm[norm > EPS]
+    inked = norm > ink * np.median(nz) if len(nz) else np.zeros(len(norm), bool)
+    shape = (v, oy, ox)
+    return best.reshape(shape), sim.reshape(shape), inked.reshape(shape)
+
+
+def word_counts(view_maps: np.ndarray, filters: np.ndarray, ink: float = 0.5) -> np.ndarray:
     """(N, V, K) number of inked windows of each view whose most similar filter (cosine) is k.
 
-    view_maps: (N, V, by, bx, C); filters: (K, nb, nb, C). A window counts as inked when its norm
-    is above `ink` times the median norm of the shape's non-empty windows (windows that only clip
-    a line's end or hold stray gradient would otherwise be assigned too).
+    view_maps: (N, V, by, bx, C); filters: (K, nb, nb, C); see `word_assignments`.
     """
     view_maps = np.asarray(view_maps, np.float32)
-    n, v, by, bx, c = view_maps.shape
-    k, nb = len(filters), filters.shape[1]
+    n, v = view_maps.shape[:2]
+    k = len(filters)
     out = np.zeros((n, v, k), np.float32)
-    oy, ox = by - nb + 1, bx - nb + 1
-    if n == 0 or k == 0 or oy <= 0 or ox <= 0:
-        return out
-    fmat = unit_rows(np.asarray(filters, np.float32).transpose(0, 3, 1, 2)).T
-    per_shape = v * oy * ox * c * nb * nb
-    step = max(1, chunk_values // per_shape)
-    for s in range(0, n, step):
-        win = sliding_window_view(view_maps[s:s + step], (nb, nb), axis=(2, 3))
-        cols = win.reshape(-1, c * nb * nb)
-        norm = np.sqrt(np.einsum("ij,ij->i", cols, cols)).reshape(-1, v * oy * ox)
-        best = (cols @ fmat).argmax(axis=1).reshape(-1, v, oy * ox)
-        for j in range(len(norm)):
-            nz = norm[j][norm[j] > EPS]
-            if not len(nz):
-                continue
-            mask = (norm[j] > ink * np.median(nz)).reshape(v, oy * ox)
-            for vv in range(v):
-                out[s + j, vv] = np.bincount(best[j, vv][mask[vv]], minlength=k)
+    for i in range(n):
+        best, _, inked = word_assignments(view_maps[i], filters, ink)
+        for vv in range(v):
+            out[i, vv] = np.bincount(best[vv][inked[vv]], minlength=k)
     return out
 
 

@@ -1,18 +1,18 @@
-"""Style patches on the surface (paper 4.5, "Style patch extraction") and style-aware best view.
+"""Style regions on the surface (paper 4.5, "Style patch extraction") and style-aware best view.
 
-The style filters of a cluster are real patches of a few shapes. To find style on every member
-of the cluster, each of its seeds' patches (three times as many seeds as the analysis used, as in
-the paper's decimation application) is compared with the cluster's style filters in HOG space
-(cosine of the block histograms, the same similarity the encoding uses). A patch that reaches
-`match_threshold` marks its footprint: the mesh vertices seen in that view that project inside
-the patch window and lie near the seed in 3D (so a surface far behind the window is not taken).
-A fixed similarity threshold alone marks almost every patch (line drawings share a lot of
-generic corners and edges), so a patch must also be closer to its own cluster's style filters
-than to the other clusters' ones: it must look like *this* style, not like style in general.
+The style filters of a cluster are words of the shared dictionary (real patches of a few
+shapes). To find where a shape carries its cluster's style, every inked window of every one of
+its drawings is matched to its most similar word of the WHOLE dictionary (the same assignment
+the encoding counts); a window is a style window when that word is a style filter of the
+shape's cluster and the similarity reaches `threshold`. Matching against the whole dictionary,
+not just the style filters, is what keeps generic corners and edges out: they are claimed by
+the generic words. This dense matching extends the paper's seed patches to regions (its
+decimation application took three times as many seeds for the same purpose): every window
+position is a candidate, so regions are not limited to where 30 or 90 seeds happened to fall.
 
-A vertex's style weight is the share of the views that see it in which it was marked: 1 means
-"style-bearing from every side it can be seen", 0 "never". Best view: the view with the most
-matched patches (ties: the larger summed similarity).
+A vertex's style weight is the share of the views that see it in which it lies inside a style
+window: 1 means "style-bearing from every side it can be seen", 0 "never". Best view: the view
+with the most style windows (ties: the larger summed similarity).
 """
 from __future__ import annotations
 
@@ -21,94 +21,85 @@ from dataclasses import dataclass
 import numpy as np
 
 from .drawings import ShapeDrawings
-from .features import hog_images, patch_descriptors
+from .encoding import word_assignments
+from .features import PIXELS_PER_CELL, hog_images
 from .rig import project
 
-EPS = 1e-6
+MAX_BOXES_PER_VIEW = 12      # style windows kept per view for the report's boxes
 
 
 @dataclass
 class ShapeLocalisation:
     weights: np.ndarray          # (N,) float32 in [0, 1], per mesh vertex
     best_view: int
-    matches: list                # (view, x, y, similarity) of every matched patch
-    view_scores: np.ndarray      # (V,) matched patches per view
+    matches: list                # (view, x, y, similarity) of the strongest style windows
+    view_scores: np.ndarray      # (V,) style windows per view
 
 
-def _unit(x: np.ndarray) -> np.ndarray:
-    x = np.asarray(x, np.float32).reshape(len(x), -1)
-    return x / np.maximum(np.linalg.norm(x, axis=1, keepdims=True), EPS)
+def style_windows(maps: np.ndarray, words: np.ndarray, word_cluster: np.ndarray, cluster: int,
+                  threshold: float):
+    """(V, oy, ox) bool style windows of one shape, and their similarities."""
+    best, sim, inked = word_assignments(maps, words)
+    style = inked & (np.asarray(word_cluster)[best] == cluster) & (sim >= threshold)
+    return style, sim
 
 
-def footprint(vertices: np.ndarray, pixels: np.ndarray, depth: np.ndarray, visible: np.ndarray,
-              seed_point: np.ndarray, seed_pixel: np.ndarray, seed_depth: float,
-              half: float, focal: float) -> np.ndarray:
-    """Vertices (bool mask) visible in this view, inside the window, and near the seed in 3D.
+def coverage(style: np.ndarray, patch_size: int, image_size: int) -> np.ndarray:
+    """(V, H, W) bool: pixels covered by at least one style window (window (r, c) starts at
+    pixel (8r, 8c) and spans patch_size pixels, as `features.patch_block_origins` aligns it)."""
+    v, oy, ox = style.shape
+    hits = np.zeros((v, image_size + 1, image_size + 1), np.int32)
+    vv, rr, cc = np.nonzero(style)
+    r0, c0 = rr * PIXELS_PER_CELL, cc * PIXELS_PER_CELL
+    r1, c1 = np.minimum(r0 + patch_size, image_size), np.minimum(c0 + patch_size, image_size)
+    # summed-area trick: +1/-1 at the rectangle corners, then cumulative sums
+    np.add.at(hits, (vv, r0, c0), 1)
+    np.add.at(hits, (vv, r0, c1), -1)
+    np.add.at(hits, (vv, r1, c0), -1)
+    np.add.at(hits, (vv, r1, c1), 1)
+    return hits.cumsum(axis=1).cumsum(axis=2)[:, :image_size, :image_size] > 0
 
-    The 3D radius is the window's half-diagonal at the seed's depth: a patch covers that much
-    surface around its seed, no more.
-    """
-    inside = (np.abs(pixels[:, 0] - seed_pixel[0]) <= half) & \
-             (np.abs(pixels[:, 1] - seed_pixel[1]) <= half)
-    radius = np.sqrt(2.0) * half * seed_depth / focal
-    near = np.linalg.norm(vertices - seed_point, axis=1) <= radius
-    return visible & inside & near
 
-
-def localise_shape(drawings: ShapeDrawings, vertices: np.ndarray, filters: np.ndarray,
-                   patch_size: int, threshold: float, focal: float,
-                   maps: np.ndarray | None = None, others: np.ndarray | None = None,
-                   ) -> ShapeLocalisation:
-    """Per-vertex style weights of one shape from its cluster's style filters (F, ...);
-    `others` are the other clusters' style filters, which a match must be closer to."""
-    n_views = drawings.n_views
-    n_vert = len(vertices)
+def localise_shape(drawings: ShapeDrawings, vertices: np.ndarray, words: np.ndarray,
+                   word_cluster: np.ndarray, cluster: int, patch_size: int,
+                   threshold: float, maps: np.ndarray | None = None) -> ShapeLocalisation:
+    """Per-vertex style weights and best view of one shape in style cluster `cluster`."""
+    size = drawings.images.shape[-1]
     if maps is None:
         maps = hog_images(drawings.images)
-    vpix, vdepth = project(drawings.cameras, vertices)
-    spix, sdepth = project(drawings.cameras, drawings.seeds)
-    marked = np.zeros((n_views, n_vert), bool)
-    view_scores = np.zeros(n_views)
-    view_sims = np.zeros(n_views)
-    matches = []
-    unit_filters = _unit(filters) if len(filters) else np.zeros((0, 1), np.float32)
-    unit_others = _unit(others) if others is not None and len(others) else None
-    half = patch_size / 2.0
-    for v in range(n_views):
-        seeds = np.flatnonzero(drawings.seed_visible[v])
-        if len(seeds) == 0 or len(unit_filters) == 0:
-            continue
-        desc, _ = patch_descriptors(maps, np.full(len(seeds), v), drawings.seed_pixels[v, seeds],
-                                    patch_size)
-        desc = _unit(desc)
-        sim = (desc @ unit_filters.T).max(axis=1)
-        ok = sim >= threshold
-        if unit_others is not None:
-            ok &= sim > (desc @ unit_others.T).max(axis=1)
-        for j, s in zip(seeds[ok], sim[ok]):
-            marked[v] |= footprint(vertices, vpix[v], vdepth[v], drawings.vertex_visible[v],
-                                   drawings.seeds[j], spix[v, j], sdepth[v, j], half, focal)
-            matches.append((v, float(spix[v, j, 0]), float(spix[v, j, 1]), float(s)))
-        view_scores[v] = int(ok.sum())
-        view_sims[v] = float(sim[ok].sum())
+    style, sim = style_windows(maps, words, word_cluster, cluster, threshold)
+    cover = coverage(style, patch_size, size)
+    pix, _ = project(drawings.cameras, vertices)
+    xy = np.clip(np.floor(pix).astype(np.int64), 0, size - 1)
+    views = np.arange(drawings.n_views)[:, None]
+    marked = drawings.vertex_visible & cover[views, xy[..., 1], xy[..., 0]]
     seen = drawings.vertex_visible.sum(axis=0)
     weights = np.where(seen > 0, marked.sum(axis=0) / np.maximum(seen, 1), 0.0).astype(np.float32)
-    best = int(np.lexsort((view_sims, view_scores))[-1])
-    return ShapeLocalisation(weights, best, matches, view_scores)
+    counts = style.sum(axis=(1, 2))
+    sims = np.where(style, sim, 0.0).sum(axis=(1, 2))
+    best = int(np.lexsort((sims, counts))[-1])
+    matches = []
+    half = patch_size / 2.0
+    for v in range(drawings.n_views):
+        rr, cc = np.nonzero(style[v])
+        order = np.argsort(-sim[v, rr, cc])[:MAX_BOXES_PER_VIEW]
+        matches += [(v, float(cc[k] * PIXELS_PER_CELL + half), float(rr[k] * PIXELS_PER_CELL + half),
+                     float(sim[v, rr[k], cc[k]])) for k in order]
+    return ShapeLocalisation(weights, best, matches, counts)
 
 
-def cluster_filters(style_filters, cluster: int) -> tuple[np.ndarray, np.ndarray | None]:
-    """(the HOG filters that discriminate `cluster`, the other clusters' filters or None).
+def top_words(word_cluster: np.ndarray, word_score: np.ndarray, per_cluster: int) -> np.ndarray:
+    """word_cluster keeping only each cluster's `per_cluster` best-scoring style words (-1 else).
 
-    A cluster with no filter of its own falls back to all style filters with no contrast set.
-    """
-    own = [f.hog for f in style_filters if f.cluster == cluster]
-    other = [f.hog for f in style_filters if f.cluster != cluster]
-    if not own:
-        own, other = [f.hog for f in style_filters], []
-    empty = np.zeros((0, 1), np.float32)
-    return (np.asarray(own, np.float32) if own else empty,
-            np.asarray(other, np.float32) if other else None)
+    Reselection keeps every word that discriminates a cluster at all (enough to cluster well);
+    marking regions wants only the most characteristic ones, or plain surface near any
+    slightly cluster-typical line gets marked too."""
+    out = np.full_like(np.asarray(word_cluster), -1)
+    for c in np.unique(word_cluster[word_cluster >= 0]):
+        ws = np.flatnonzero(word_cluster == c)
+        ws = ws[np.argsort(-np.asarray(word_score)[ws], kind="stable")][:per_cluster]
+        out[ws] = c
+    return out
 
 
 def face_weights(weights: np.ndarray, faces: np.ndarray) -> np.ndarray:

@@ -68,6 +68,9 @@ class AnalysisResult:
     view_weights: np.ndarray | None
     rounds: list[dict] = field(default_factory=list)
     timings: dict = field(default_factory=dict)
+    words: np.ndarray | None = None          # (K, nb, nb, C) the whole dictionary (unit HOG)
+    word_cluster: np.ndarray | None = None   # (K,) the cluster a word is a style filter of, or -1
+    word_score: np.ndarray | None = None     # (K,) its discriminant score (-inf for other words)
 
 
 def _check_inputs(drawings, params, labels, triplets, fusion):
@@ -358,6 +361,10 @@ def analyse(drawings: list[ShapeDrawings], params: AnalysisParams,
                                  source_shape=int(bank.shape[f]), source_seed=int(bank.seed[f]),
                                  source_pixel=(float(bank.pixel[f, 0]), float(bank.pixel[f, 1])),
                                  score=float(sel.score[f])) for f in final]
+    word_cluster = np.full(len(bank), -1, np.int64)
+    word_score = np.full(len(bank), -np.inf)
+    for f, sf in zip(final, style_filters):
+        word_cluster[f], word_score[f] = sf.cluster, sf.score
     predicted = [classes[c] for c in clusters] if classes is not None else None
     label_given = (y >= 0) if y is not None else np.zeros(n, bool)
     if weights is not None:
@@ -368,7 +375,8 @@ def analyse(drawings: list[ShapeDrawings], params: AnalysisParams,
                           n_clusters=n_clusters, fused=np.asarray(fused), confidence=conf,
                           classes=classes, predicted=predicted, label_given=label_given,
                           style_filters=style_filters, responses=responses, view_weights=weights,
-                          rounds=rounds, timings=timings)
+                          rounds=rounds, timings=timings, words=bank.hog,
+                          word_cluster=word_cluster, word_score=word_score)
 
 
 def style_similarity(result: AnalysisResult) -> np.ndarray:

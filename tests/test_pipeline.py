@@ -91,8 +91,6 @@ def test_labels_raise_purity(collection, unsupervised, labelled):
     assert purity(labelled.clusters, styles) > purity(unsupervised[0].clusters, styles)
 
 
-@pytest.mark.xfail(reason="TripletClustering (clustering.py) lets clusters die: 3 asked, 1-2 "
-                          "returned on this set; see the pipeline report", strict=False)
 def test_triplets_raise_purity(collection, unsupervised):
     drawings, styles, _ = collection
     result = analyse(drawings, PARAMS, triplets=_triplets(collection, 2 * len(drawings)))

@@ -213,13 +213,14 @@ def _run_steps(meshes: list[Mesh], options: JobOptions):
     rig = Rig(n_views=settings.n_views, elevation_deg=settings.elevation_deg,
               image_size=settings.image_size)
     locs, shapes = [], []
+    marked_words = localisation.top_words(result.word_cluster, result.word_score,
+                                          options.localisation.words_per_cluster)
     for i, (m, d) in enumerate(zip(good, drawings)):
         yield ("localise", i, len(good))
         normal = normalise(m, options.up)
-        own, others = localisation.cluster_filters(result.style_filters, int(result.clusters[i]))
-        loc = localisation.localise_shape(d, normal.vertices, own, options.params.patch_size,
-                                          options.localisation.match_threshold, rig.focal_px,
-                                          others=others)
+        loc = localisation.localise_shape(d, normal.vertices, result.words, marked_words,
+                                          int(result.clusters[i]), options.params.patch_size,
+                                          options.localisation.match_threshold)
         locs.append(loc)
         centre, radius = normalisation(m, options.up)
         given = bool(result.label_given[i])
@@ -258,8 +259,7 @@ def build_report(meshes, shapes, clusters, skipped, options, timings, result, lo
         "parameters": {
             "drawing": asdict(options.drawing_settings()) | {"n_seeds_analysis": options.n_seeds},
             "analysis": options.params.as_dict(),
-            "localisation": {"seed_multiplier": options.localisation.seed_multiplier,
-                             "match_threshold": options.localisation.match_threshold},
+            "localisation": asdict(options.localisation),
             "labels": len(options.labels or {}), "triplets": len(options.triplets or []),
             "jobs": options.jobs,
         },
