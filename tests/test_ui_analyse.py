@@ -1,9 +1,6 @@
 """The Analyse operator and the results operators, with the job's generator replaced by a quick
 stand-in (the real analysis is exercised by the job's own tests): what the operator hands to the
 job, that it writes back once at the end, and that a failed run leaves the scene as it was."""
-import importlib.util
-import sys
-from pathlib import Path
 
 import numpy as np
 import pytest
@@ -11,27 +8,6 @@ import pytest
 bpy = pytest.importorskip("bpy")
 pytestmark = pytest.mark.blender
 
-ROOT = Path(__file__).resolve().parent.parent
-PKG = "style_coanalysis_ext"
-
-
-def load_extension():
-    """The repo root imported as a package (as Blender would, under another name)."""
-    if PKG not in sys.modules:
-        spec = importlib.util.spec_from_file_location(
-            PKG, ROOT / "__init__.py", submodule_search_locations=[str(ROOT)])
-        module = importlib.util.module_from_spec(spec)
-        sys.modules[PKG] = module
-        spec.loader.exec_module(module)
-    return sys.modules[PKG]
-
-
-@pytest.fixture(scope="module")
-def ext():
-    module = load_extension()
-    module.register()
-    yield module
-    module.unregister()
 
 
 NAMES = ("Chair_a", "Chair_b", "Table_a", "Table_b")

@@ -9,16 +9,7 @@ import pytest
 
 bpy = pytest.importorskip("bpy")
 pytestmark = [pytest.mark.blender, pytest.mark.slow]
-sys.path.insert(0, str(Path(__file__).resolve().parent))
-from test_ui_analyse import ROOT, load_extension  # noqa: E402
-
-
-@pytest.fixture(scope="module")
-def ext():
-    module = load_extension()
-    module.register()
-    yield module
-    module.unregister()
+ROOT = Path(__file__).resolve().parent.parent
 
 
 @pytest.fixture(scope="module")

@@ -1,8 +1,5 @@
 """Write-back of a JobResult into a real scene: what appears, that re-runs replace rather than pile
 up, that clearing gives the meshes back exactly, and that it all survives save and reload."""
-import importlib.util
-import sys
-from pathlib import Path
 
 import numpy as np
 import pytest
@@ -10,27 +7,6 @@ import pytest
 bpy = pytest.importorskip("bpy")
 pytestmark = pytest.mark.blender
 
-ROOT = Path(__file__).resolve().parent.parent
-PKG = "style_coanalysis_ext"
-
-
-def load_extension():
-    """The repo root imported as a package (as Blender would, under another name)."""
-    if PKG not in sys.modules:
-        spec = importlib.util.spec_from_file_location(
-            PKG, ROOT / "__init__.py", submodule_search_locations=[str(ROOT)])
-        module = importlib.util.module_from_spec(spec)
-        sys.modules[PKG] = module
-        spec.loader.exec_module(module)
-    return sys.modules[PKG]
-
-
-@pytest.fixture(scope="module")
-def ext():
-    module = load_extension()
-    module.register()
-    yield module
-    module.unregister()
 
 
 @pytest.fixture

@@ -1,0 +1,34 @@
+"""Shared fixtures. `ext`: the repository root registered as a Blender extension package.
+
+The root is imported under another package name, as Blender does when it installs it
+(bl_ext.<repo>.<id>), so relative imports are exercised; the test that installs the real zip
+is tests/test_extension.py.
+"""
+import importlib.util
+import sys
+from pathlib import Path
+
+import pytest
+
+ROOT = Path(__file__).resolve().parent.parent
+PKG = "style_coanalysis_ext"
+
+
+def load_extension():
+    """The repo root imported as a package named PKG (once per process)."""
+    if PKG not in sys.modules:
+        spec = importlib.util.spec_from_file_location(
+            PKG, ROOT / "__init__.py", submodule_search_locations=[str(ROOT)])
+        module = importlib.util.module_from_spec(spec)
+        sys.modules[PKG] = module
+        spec.loader.exec_module(module)
+    return sys.modules[PKG]
+
+
+@pytest.fixture(scope="module")
+def ext():
+    pytest.importorskip("bpy")
+    module = load_extension()
+    module.register()
+    yield module
+    module.unregister()
