@@ -87,6 +87,8 @@ def main():
     ap.add_argument("--cache", default=None)
     ap.add_argument("--quick", action="store_true", help="unsupervised, 20%% labels, 300 triplets, baselines")
     ap.add_argument("--rounds", type=int, default=AnalysisParams().max_rounds)
+    ap.add_argument("--suggestive-contours", action="store_true", help="Freestyle with suggestive contours")
+    ap.add_argument("--only", nargs="+", default=None, help="run only rows whose name contains one of these")
     args = ap.parse_args()
 
     t0 = time.perf_counter()
@@ -94,7 +96,8 @@ def main():
     styles = np.array([m.truth["style"] for m in meshes])
     cats = np.array([m.truth["category"] for m in meshes])
     n_styles = len(np.unique(styles))
-    settings = DrawingSettings(renderer=args.renderer, n_seeds=90)
+    settings = DrawingSettings(renderer=args.renderer, n_seeds=90,
+                               suggestive_contours=args.suggestive_contours)
     drawings, skipped = draw_collection(meshes, settings, args.cache, jobs=args.jobs,
                                         progress=lambda s, d, t: print(f"\r{s} {d}/{t}", end="",
                                                                        file=sys.stderr))
@@ -112,6 +115,8 @@ def main():
     rows = {}
 
     def record(key, fn):
+        if args.only and not any(o in key for o in args.only):
+            return
         runs, cat_runs, secs = [], [], []
         for seed in range(args.seeds):
             rng = np.random.default_rng(1000 + seed)
@@ -177,8 +182,10 @@ def main():
             record(f"eta {eta:.1f} (k = true)", lambda s, r, eta=eta: analysis(s, k=n_styles, eta=eta))
 
     RESULTS.mkdir(parents=True, exist_ok=True)
-    stem = f"eval_{args.collection}{'_quick' if args.quick else ''}"
+    stem = (f"eval_{args.collection}{'_sc' if args.suggestive_contours else ''}"
+            f"{'_quick' if args.quick else ''}{'_only' if args.only else ''}")
     out = {"collection": args.collection, "n_shapes": len(meshes), "renderer": args.renderer,
+           "suggestive_contours": args.suggestive_contours,
            "seeds": args.seeds, "render_seconds": render_s, "chance": float(
                max(np.mean(styles == s) for s in np.unique(styles))), "rows": rows}
     (RESULTS / f"{stem}.json").write_text(json.dumps(out, indent=2))
