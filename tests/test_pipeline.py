@@ -84,8 +84,10 @@ def test_labels_are_kept_and_map_to_classes(collection, labelled):
     assert np.all(result.confidence[result.label_given] == 1.0)
 
 
-@pytest.mark.xfail(reason="PSLF label transduction (pslf.py) predicts barely above chance on "
-                          "this set; see the pipeline report", strict=False)
+@pytest.mark.xfail(reason="known limitation: on this 36-shape synthetic set unsupervised spectral "
+                          "clustering already reaches 0.97 and 9 labels spread over a k-NN graph "
+                          "tie or lose (0.97 / 0.78-0.94 on harder variants); on the 120-shape "
+                          "sample 20% labels raise purity 0.872 -> 0.956", strict=False)
 def test_labels_raise_purity(collection, unsupervised, labelled):
     styles = collection[1]
     assert purity(labelled.clusters, styles) > purity(unsupervised[0].clusters, styles)
