@@ -267,8 +267,11 @@ def choose_n_clusters(x: np.ndarray, random_state: int = 0, max_clusters: int = 
 
 def analyse(drawings: list[ShapeDrawings], params: AnalysisParams,
             labels: dict | None = None, triplets: list | None = None, fusion: str = "pslf",
-            progress=None, cancel=None) -> AnalysisResult:
-    """Cluster shapes by style and find their style filters (unsupervised, labels or triplets)."""
+            progress=None, cancel=None, maps: np.ndarray | None = None) -> AnalysisResult:
+    """Cluster shapes by style and find their style filters (unsupervised, labels or triplets).
+
+    `maps`: the drawings' HOG maps (N, V, by, bx, C) when the caller already has them (the job
+    reuses them to find style regions); computed here otherwise."""
     timings: dict[str, float] = {}
     prog = Progress.wrap(progress, cancel)
     names, y, classes, trip = _check_inputs(drawings, params, labels, triplets, fusion)
@@ -283,13 +286,14 @@ def analyse(drawings: list[ShapeDrawings], params: AnalysisParams,
         raise InputError("no patch with ink in any drawing: the shapes drew no lines")
     timings["patches"] = time.perf_counter() - t
 
-    t = time.perf_counter()
-    maps = []
-    for i, d in enumerate(drawings):
-        prog.step("hog", i, n)
-        maps.append(hog_images(d.images))
-    maps = np.stack(maps)                                     # (N, V, by, bx, C)
-    timings["hog"] = time.perf_counter() - t
+    if maps is None:
+        t = time.perf_counter()
+        maps = []
+        for i, d in enumerate(drawings):
+            prog.step("hog", i, n)
+            maps.append(hog_images(d.images))
+        maps = np.stack(maps)                                 # (N, V, by, bx, C)
+        timings["hog"] = time.perf_counter() - t
 
     t = time.perf_counter()
     prog.step("representatives", 0, 1)

@@ -194,15 +194,24 @@ def _run_steps(meshes: list[Mesh], options: JobOptions):
         raise InputError("fewer than two meshes could be drawn: " +
                          "; ".join(f"'{k}' {v}" for k, v in skipped.items()))
 
-    # 2. the analysis, on the first n_seeds seeds of each shape
+    # 2. the analysis, on the first n_seeds seeds of each shape; the HOG maps are computed
+    # once here because the style regions (stage 3) read them too
     from .. import pipeline
+    from ..features import hog_images
+    t0 = time.perf_counter()
+    maps = []
+    for i, d in enumerate(drawings):
+        yield ("hog", i, len(drawings))
+        maps.append(hog_images(d.images))
+    maps = np.stack(maps)
+    timings["hog"] = time.perf_counter() - t0
     t0 = time.perf_counter()
     analysis_drawings = [seed_subset(d, options.n_seeds) for d in drawings]
     box[0] = ("analyse", 0, 1)
     result = yield from _in_thread(
         lambda: pipeline.analyse(analysis_drawings, options.params, labels=options.labels,
                                  triplets=options.triplets, progress=progress,
-                                 cancel=stop),
+                                 cancel=stop, maps=maps),
         box, cancel_flag)
     timings["analyse"] = time.perf_counter() - t0
     for k, v in (result.timings or {}).items():
@@ -220,7 +229,7 @@ def _run_steps(meshes: list[Mesh], options: JobOptions):
         normal = normalise(m, options.up)
         loc = localisation.localise_shape(d, normal.vertices, result.words, marked_words,
                                           int(result.clusters[i]), options.params.patch_size,
-                                          options.localisation.match_threshold)
+                                          options.localisation.match_threshold, maps=maps[i])
         locs.append(loc)
         centre, radius = normalisation(m, options.up)
         given = bool(result.label_given[i])
