@@ -19,7 +19,8 @@ import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
 
-from style_coanalysis import baselines, metrics, sample, voxels  # noqa: E402
+from style_coanalysis import metrics, sample  # noqa: E402
+from style_coanalysis.evaluation import baselines, voxels  # noqa: E402
 
 
 def report(label, feats, shapes, seeds):

@@ -22,7 +22,7 @@ import numpy as np
 ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT))
 
-from style_coanalysis.baselines import cluster_baseline, global_shape_features, line_statistics  # noqa: E402
+from style_coanalysis.evaluation.baselines import cluster_baseline, global_shape_features, line_statistics  # noqa: E402
 from style_coanalysis.metrics import nmi, purity  # noqa: E402
 from style_coanalysis.params import AnalysisParams, DrawingSettings  # noqa: E402
 from style_coanalysis.pipeline import analyse  # noqa: E402
@@ -84,7 +84,7 @@ def main():
         from style_coanalysis.sample import generate
         run("sample collection", generate(120, 0), seeds)
     if a.voxels:
-        from style_coanalysis.voxels import load_hu2017
+        from style_coanalysis.evaluation.voxels import load_hu2017
         meshes = cached_only(load_hu2017(per_class=a.voxels))
         run(f"hu2017 voxels, per_class={a.voxels}, cached {len(meshes)}", meshes, seeds)
 

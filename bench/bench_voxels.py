@@ -19,7 +19,7 @@ import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
 
-from style_coanalysis import voxels  # noqa: E402
+from style_coanalysis.evaluation import voxels  # noqa: E402
 
 
 def edge_stats(v, f):

@@ -26,7 +26,8 @@ import numpy as np
 ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT))
 
-from style_coanalysis import baselines, metrics, pipeline  # noqa: E402
+from style_coanalysis import metrics, pipeline  # noqa: E402
+from style_coanalysis.evaluation import baselines  # noqa: E402
 from style_coanalysis.blender.batch import draw_collection  # noqa: E402
 from style_coanalysis.blender.job import seed_subset  # noqa: E402
 from style_coanalysis.meshes import normalise  # noqa: E402
@@ -39,7 +40,7 @@ def load(collection: str, size: int, per_class: int | None, seed: int):
     if collection == "sample":
         from style_coanalysis.sample import generate
         return generate(size=size, seed=seed)
-    from style_coanalysis.voxels import load_hu2017
+    from style_coanalysis.evaluation.voxels import load_hu2017
     return load_hu2017(per_class=per_class, seed=seed)
 
 

@@ -31,6 +31,7 @@ class DrawingSettings:
 class AnalysisParams:
     """The global analysis (paper sections 4.1-4.5) with the paper's parameter values."""
 
+    method: str = "default"              # "default" or "paper" (sections 3-4.5 as written)
     patch_size: int = 24                 # pixels, style patches/filters (paper: 48; see pipeline)
     n_representatives: int = 50          # k-means centres of the layout (structure) dictionary
     n_words: int = 200                   # k-means centres of the style dictionary (all views)

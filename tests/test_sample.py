@@ -2,7 +2,8 @@
 import numpy as np
 import pytest
 
-from style_coanalysis import baselines, metrics, sample
+from style_coanalysis import metrics, sample
+from style_coanalysis.evaluation import baselines
 from style_coanalysis.meshes import face_areas, validate
 
 

@@ -4,7 +4,7 @@ import os
 import numpy as np
 import pytest
 
-from style_coanalysis import voxels
+from style_coanalysis.evaluation import voxels
 from style_coanalysis.meshes import InputError, validate
 
 ROOT = voxels.resolve_root()

@@ -10,7 +10,7 @@ from skimage.filters import sobel_h, sobel_v
 from sklearn.cluster import KMeans
 from sklearn.preprocessing import StandardScaler
 
-from .meshes import face_areas, normalise
+from ..meshes import face_areas, normalise
 
 N_ORIENTATIONS = 8
 

@@ -14,7 +14,7 @@ import numpy as np
 import scipy.sparse as sp
 from skimage.measure import marching_cubes
 
-from .meshes import InputError, Mesh, up_to_z
+from ..meshes import InputError, Mesh, up_to_z
 
 DEFAULT_ROOT = "../shared/data/hu2017_vox"
 
