@@ -272,6 +272,11 @@ def analyse(drawings: list[ShapeDrawings], params: AnalysisParams,
 
     `maps`: the drawings' HOG maps (N, V, by, bx, C) when the caller already has them (the job
     reuses them to find style regions); computed here otherwise."""
+    if params.method == "paper":
+        from .paper_method import analyse_paper
+        return analyse_paper(drawings, params, labels, triplets, progress, cancel, maps)
+    if params.method != "default":
+        raise InputError(f"unknown method '{params.method}', choose 'default' or 'paper'")
     timings: dict[str, float] = {}
     prog = Progress.wrap(progress, cancel)
     names, y, classes, trip = _check_inputs(drawings, params, labels, triplets, fusion)
