@@ -13,7 +13,7 @@ import bpy
 
 from ..style_coanalysis.blender import properties, writeback
 from ..style_coanalysis.meshes import InputError
-from ..style_coanalysis.params import AnalysisParams
+from ..style_coanalysis.options import PARAMETERS, build_options, check_coordinates, check_shapes
 from ..style_coanalysis.progress import Cancelled
 
 STEP_BUDGET_S = 0.1     # time spent in the generator per TIMER event before yielding to the UI
@@ -57,11 +57,13 @@ class Stepper:
             gen.close()
 
     def status(self) -> str:
-        stage, done, total = self.progress
-        return f"Style analysis: {stage} {done}/{total} (Esc to cancel)"
+        stage, done, total = self.progress[:3]
+        detail = self.progress[3] if len(self.progress) > 3 and self.progress[3] else ""
+        more = f", {detail}" if detail else ""
+        return f"Style analysis: {stage} {done}/{total}{more} (Esc to cancel)"
 
     def fraction(self) -> float:
-        _, done, total = self.progress
+        _, done, total = self.progress[:3]
         return min(1.0, done / total) if total else 0.0
 
 
@@ -135,15 +137,17 @@ def build_job(context):
         else:
             triplets.append(abc)
 
-    n_clusters = None if settings.auto_clusters else settings.n_clusters
-    params = AnalysisParams(
-        n_representatives=settings.n_representatives, n_clusters=n_clusters, eta=settings.eta,
-        lam=settings.lam, beta=settings.beta, gamma=settings.gamma, mu=settings.mu,
-        max_rounds=settings.max_rounds, random_state=settings.seed)
-    options = job.JobOptions(
+    # the same builder and checks as the command line (style_coanalysis/options.py)
+    options = build_options(
         renderer=_renderer(context), up=settings.up, jobs=_jobs(context),
-        cache_dir=properties.cache_dir(context), seed=settings.seed, params=params,
-        labels=labels or None, triplets=triplets or None)
+        cache_dir=properties.cache_dir(context), seed=settings.seed,
+        clusters="auto" if settings.auto_clusters else settings.n_clusters,
+        method=settings.method, labels=labels or None, triplets=triplets or None,
+        **{option: getattr(settings, properties.PARAMETER_PROPS[option])
+           for option in PARAMETERS})
+    for m in meshes:
+        check_coordinates(m)
+    check_shapes(options, [m.name for m in meshes])
     return meshes, options, warnings, job
 
 

@@ -78,7 +78,8 @@ class VIEW3D_PT_style_advanced(_StylePanel, bpy.types.Panel):
         s = context.scene.style_coanalysis
         col = self.layout.column()
         col.use_property_split = True
-        for name in ("n_representatives", "eta", "lam", "beta", "gamma", "mu", "max_rounds"):
+        for name in ("method", "n_representatives", "eta", "lam", "beta", "gamma", "mu",
+                     "max_rounds"):
             col.prop(s, name)
 
 

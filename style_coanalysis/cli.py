@@ -12,6 +12,7 @@ import sys
 import traceback
 
 from .meshes import InputError
+from .options import DEFAULTS, METHOD_HELP, METHODS, PARAMETERS, default, help_text
 
 
 def _add_drawing_options(p: argparse.ArgumentParser) -> None:
@@ -19,7 +20,8 @@ def _add_drawing_options(p: argparse.ArgumentParser) -> None:
                    help="line renderer: freestyle (faithful, default) or lineart (fast)")
     p.add_argument("--up", choices=("z", "y"), default="z", help="up axis of the assets (default z)")
     p.add_argument("--collection", help="with a .blend INPUT: analyse only this collection's meshes")
-    p.add_argument("--jobs", type=int, default=0, help="parallel processes for per-shape work (0: all cores)")
+    p.add_argument("--jobs", type=int, default=0,
+                   help="parallel processes for per-shape work (default 0: all cores)")
     p.add_argument("--cache", help="drawing cache folder (default: a folder under the user cache)")
     p.add_argument("--suggestive-contours", action="store_true",
                    help="also draw suggestive contours (paper's choice; slower, see README)")
@@ -46,15 +48,14 @@ def build_parser() -> argparse.ArgumentParser:
     _add_drawing_options(p)
     p.add_argument("--labels", help="CSV of name,style for a few shapes (semi-supervised)")
     p.add_argument("--triplets", help="CSV of a,b,c: a is closer in style to b than to c")
-    p.add_argument("--clusters", default="auto", help="'auto' or a number of style clusters")
-    p.add_argument("--seed", type=int, default=0)
-    p.add_argument("--representatives", type=int, default=50, help="k-means patches per view (paper: 50)")
-    p.add_argument("--eta", type=float, default=0.2, help="PSLF shared proportion Kc/K (paper: 0.2)")
-    p.add_argument("--lam", type=float, default=20.0, help="PSLF view-weight smoothness (paper: 20)")
-    p.add_argument("--beta", type=float, default=0.05, help="label term weight (paper: ~0.05)")
-    p.add_argument("--gamma", type=float, default=10.0, help="l2,1 weight on W (paper: ~10)")
-    p.add_argument("--mu", type=float, default=0.07, help="patch reselection threshold (paper: 0.07)")
-    p.add_argument("--rounds", type=int, default=5, help="cluster-and-reselect rounds at most")
+    p.add_argument("--clusters", default="auto",
+                   help="'auto' or a number of style clusters, at least 2 (default auto)")
+    p.add_argument("--method", choices=METHODS, default=None, help=f"{METHOD_HELP} (default "
+                   f"{DEFAULTS.method})")
+    p.add_argument("--seed", type=int, default=0, help="every random choice (default 0)")
+    for option in PARAMETERS:   # defaults and help from params.AnalysisParams (one place)
+        kind = type(default(option))
+        p.add_argument(f"--{option}", type=kind, default=None, help=help_text(option))
     return parser
 
 

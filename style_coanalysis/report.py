@@ -67,9 +67,12 @@ def shaded_image(vertices: np.ndarray, faces: np.ndarray, weights: np.ndarray,
     return img
 
 
-def write_html(job, meshes_normalised, out_dir, title="Style co-analysis") -> Path:
-    """report.html plus images/ in out_dir, from a JobResult and the shapes' normalised meshes."""
+def write_html(job, meshes_normalised, out_dir, title="Style co-analysis", progress=None) -> Path:
+    """report.html plus images/ in out_dir, from a JobResult and the shapes' normalised meshes.
+    `progress(stage, done, total)` is called per shape written."""
     out_dir = Path(out_dir)
+    stems = image_stems([s.name for s in job.shapes])
+    n_done, n_total = 0, len(job.shapes)
     img_dir = out_dir / "images"
     img_dir.mkdir(parents=True, exist_ok=True)
     patch = job.report["parameters"]["analysis"]["patch_size"]
@@ -84,10 +87,13 @@ def write_html(job, meshes_normalised, out_dir, title="Style co-analysis") -> Pa
         head = f"Cluster {c['id']}: {c['size']} shapes" + (f", style '{c['label']}'" if c["label"] else "")
         parts.append(f"<h2>{html.escape(head)}</h2>")
         for name in c["members"]:
+            if progress is not None:
+                progress("report", n_done, n_total)
+            n_done += 1
             s, d, loc, m = by_name[name]
             v = s.best_view
             boxes = [(x, y) for (view, x, y, _) in loc.matches if view == v]
-            stem = _safe(name)
+            stem = stems[name]
             lines_image(d.images[v], boxes, patch).save(img_dir / f"{stem}_lines.png")
             eye = _camera_centre(d.cameras[v])
             shaded_image(m.vertices, m.faces, s.vertex_weights, d.cameras[v], eye,
@@ -103,6 +109,8 @@ def write_html(job, meshes_normalised, out_dir, title="Style co-analysis") -> Pa
             f"<li>{html.escape(n)}: {html.escape(r)}</li>" for n, r in job.skipped) + "</ul>")
     page = out_dir / "report.html"
     page.write_text("\n".join(parts))
+    if progress is not None:
+        progress("report", n_total, n_total)
     return page
 
 
@@ -137,3 +145,25 @@ def _camera_centre(P: np.ndarray) -> np.ndarray:
 
 def _safe(name: str) -> str:
     return "".join(ch if ch.isalnum() or ch in "-_." else "_" for ch in name)
+
+
+def image_stems(names) -> dict:
+    """A file-name stem per shape name, unique even where names differ only in characters a
+    file name cannot hold ('a b' and 'a_b') or in case (file systems that ignore case): such
+    names, and very long ones, get a short digest of the full name appended."""
+    import hashlib
+    safe = {n: _safe(n).lstrip(".") or "shape" for n in names}
+    counts: dict = {}
+    for n in names:
+        counts[safe[n].lower()] = counts.get(safe[n].lower(), 0) + 1
+    stems, taken = {}, set()
+    for n in names:
+        stem = safe[n]
+        if counts[stem.lower()] > 1 or len(stem) > 100:
+            stem = f"{stem[:100]}-{hashlib.sha1(n.encode('utf-8')).hexdigest()[:8]}"
+        base, k = stem, 1
+        while stem.lower() in taken:    # a digest equal to another shape's own name
+            stem, k = f"{base}-{k}", k + 1
+        taken.add(stem.lower())
+        stems[n] = stem
+    return stems

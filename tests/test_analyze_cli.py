@@ -58,10 +58,10 @@ def sample(tmp_path_factory):
 
 @pytest.fixture(scope="module")
 def first_run(sample, tmp_path_factory):
-    out = tmp_path_factory.mktemp("run1")
+    out = tmp_path_factory.mktemp("run1") / "result"
     before = digest(sample)
     res = run_cmd("analyze", sample / "sample.blend", "--out", out, "--renderer", "lineart",
-                  "--jobs", 2, "--cache", out / "cache", "--rounds", 2)
+                  "--jobs", 2, "--cache", out.parent / "cache", "--rounds", 2)
     assert res.returncode == 0, res.stderr[-3000:]
     assert digest(sample) == before, "the input files were modified"
     return out, res
@@ -99,16 +99,16 @@ def test_result_blend_carries_results_on_every_mesh(first_run):
 
 def test_second_run_on_its_own_result_changes_nothing_structurally(first_run, tmp_path):
     out, _ = first_run
-    res = run_cmd("analyze", out / "result.blend", "--out", tmp_path, "--renderer", "lineart",
-                  "--jobs", 2, "--cache", out / "cache", "--rounds", 2)
+    res = run_cmd("analyze", out / "result.blend", "--out", tmp_path / "again", "--renderer", "lineart",
+                  "--jobs", 2, "--cache", out.parent / "cache", "--rounds", 2)
     assert res.returncode == 0, res.stderr[-3000:]
-    a, b = blend_state(out / "result.blend"), blend_state(tmp_path / "result.blend")
+    a, b = blend_state(out / "result.blend"), blend_state(tmp_path / "again" / "result.blend")
     assert a["collections"] == b["collections"] and a["n_materials"] == b["n_materials"]
     for name in a["objects"]:
         assert a["objects"][name]["groups"] == b["objects"][name]["groups"]
         assert a["objects"][name]["materials"] == b["objects"][name]["materials"]
     # the drawings were all cached by the first run: nothing was rendered again
-    rep = json.loads((tmp_path / "report.json").read_text())
+    rep = json.loads((tmp_path / "again" / "report.json").read_text())
     assert rep["seconds"]["render"] < json.loads((out / "report.json").read_text())["seconds"]["render"]
 
 
@@ -200,7 +200,7 @@ def test_folder_of_obj_files_gives_objects_with_results(sample, first_run, tmp_p
     out, _ = first_run
     before = digest(sample / "meshes")
     res = run_cmd("analyze", sample / "meshes", "--out", tmp_path, "--renderer", "lineart",
-                  "--jobs", 2, "--cache", out / "cache", "--rounds", 2)
+                  "--jobs", 2, "--cache", out.parent / "cache", "--rounds", 2)
     assert res.returncode == 0, res.stderr[-3000:]
     assert digest(sample / "meshes") == before
     state = blend_state(tmp_path / "result.blend")

@@ -108,8 +108,9 @@ def test_collection_second_run_renders_nothing(tmp_path, monkeypatch):
     from style_coanalysis.blender import batch, render
     bpy.ops.wm.read_factory_settings(use_empty=True)
     calls = []
-    real = render.draw_shape
-    monkeypatch.setattr(render, "draw_shape", lambda m, s, **kw: calls.append(m.name) or real(m, s, **kw))
+    real = render.draw_shape_steps
+    monkeypatch.setattr(render, "draw_shape_steps",
+                        lambda m, s, **kw: calls.append(m.name) or real(m, s, **kw))
     shapes = [box("a"), box("b", 2.0), Mesh("empty", np.zeros((3, 3)), np.zeros((0, 3)))]
     s = DrawingSettings(renderer="lineart")
     events = []

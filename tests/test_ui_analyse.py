@@ -76,14 +76,13 @@ def test_analyse_hands_constraints_and_settings_to_the_job(scene, fake):
     bpy.ops.style.label_add(name="Ming")
     bpy.data.objects["Chair_a"].style_coanalysis.label = "Ming"
     bpy.data.objects["Table_a"].style_coanalysis.label = "Gone"       # not a label any more
-    bpy.ops.style.triplet_add(a="Chair_a", b="Chair_b", c="Table_a")
     s.auto_clusters, s.n_clusters, s.eta, s.max_rounds, s.renderer = False, 2, 0.3, 2, "lineart"
+    s.method = "paper"
     assert bpy.ops.style.analyse() == {"FINISHED"}
     (meshes, options), = fake.calls
     assert [m.name for m in meshes] == list(NAMES)
-    assert options.labels == {"Chair_a": "Ming"}
-    assert options.triplets == [("Chair_a", "Chair_b", "Table_a")]
-    assert options.renderer == "lineart"
+    assert options.labels == {"Chair_a": "Ming"} and options.triplets is None
+    assert options.renderer == "lineart" and options.params.method == "paper"
     assert options.params.n_clusters == 2 and options.params.eta == pytest.approx(0.3)
     assert options.params.max_rounds == 2 and options.params.n_representatives == 50
     # written back once, at the end
@@ -91,6 +90,39 @@ def test_analyse_hands_constraints_and_settings_to_the_job(scene, fake):
     chair = bpy.data.objects["Chair_a"]
     assert chair["style_cluster"] == 0 and chair["style_label_given"]
     assert chair.vertex_groups.get("style_weight") is not None
+    # triplets instead of labels
+    bpy.data.objects["Chair_a"].style_coanalysis.label = ""
+    bpy.ops.style.triplet_add(a="Chair_a", b="Chair_b", c="Table_a")
+    assert bpy.ops.style.analyse() == {"FINISHED"}
+    options = fake.calls[-1][1]
+    assert options.triplets == [("Chair_a", "Chair_b", "Table_a")] and options.labels is None
+
+
+def test_operator_defaults_come_from_params(ext, scene):
+    """One source of truth: the panel's defaults are AnalysisParams' (issue 12)."""
+    from style_coanalysis_ext.style_coanalysis.params import AnalysisParams
+    from style_coanalysis_ext.style_coanalysis.blender.properties import PARAMETER_PROPS
+    from style_coanalysis_ext.style_coanalysis.options import PARAMETERS
+    p, s = AnalysisParams(), scene.style_coanalysis
+    for option, prop in PARAMETER_PROPS.items():
+        assert getattr(s, prop) == pytest.approx(getattr(p, PARAMETERS[option][0])), prop
+    assert s.method == p.method == "default"
+
+
+def test_bad_settings_are_refused_before_the_job_starts(scene, fake):
+    """Labels and triplets together, or more clusters than shapes: refused up front by the
+    same checks as the command line, and the job never starts (issue 12, item 4)."""
+    s = scene.style_coanalysis
+    bpy.ops.style.label_add(name="Ming")
+    bpy.data.objects["Chair_a"].style_coanalysis.label = "Ming"
+    bpy.ops.style.triplet_add(a="Chair_a", b="Chair_b", c="Table_a")
+    with pytest.raises(RuntimeError, match="labels or triplets, not both"):
+        bpy.ops.style.analyse()
+    bpy.data.objects["Chair_a"].style_coanalysis.label = ""
+    s.auto_clusters, s.n_clusters = False, 5
+    with pytest.raises(RuntimeError, match="more clusters than the 4"):
+        bpy.ops.style.analyse()
+    assert fake.calls == []
 
 
 def test_failed_run_leaves_the_scene_as_it_was(scene, job, monkeypatch):

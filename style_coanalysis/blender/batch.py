@@ -1,15 +1,19 @@
-"""Drawings for a whole collection: normalise, use the cache, render the rest in parallel.
+"""Drawings for a whole collection: normalise, use the cache, render the rest.
 
 Per-shape work is a pure function of (normalised mesh, settings) (DESIGN.md), so uncached shapes
 go to worker processes and every result is cached by the parent (one writer per entry).
 
-Parallelism:
-- With Blender as a Python module (`bpy.app.binary_path == ""`, tests and the command line),
-  `sys.executable` is the venv's Python, which can import bpy: workers are started with
+Where rendering happens is decided first, and bpy never runs off the main thread:
+- With Blender as a Python module (`bpy.app.binary_path == ""`, tests and the command line) and
+  jobs > 1, `sys.executable` is the venv's Python, which can import bpy: workers are started with
   multiprocessing's 'spawn' method and each imports bpy and resets to factory settings itself.
-- Inside Blender's GUI, `sys.executable` is Blender's bundled Python, which cannot import bpy,
-  and a long render should stay cancellable from the UI: there we render in-process (jobs=1)
-  whatever `jobs` asks for. Freestyle/Cycles still use every core for the rendering itself.
+  The parent only waits for them (no thread), so Ctrl-C or a cancel stops them at once. A worker
+  that dies (a crash in Blender) costs its shape one retry in a fresh worker of its own; only a
+  shape that fails twice is skipped.
+- Inside Blender (GUI or `blender -b`), `sys.executable` is Blender's bundled Python, which cannot
+  import bpy: there, and with jobs=1, shapes render in this process on the calling (main) thread,
+  in steps of one view (`render.draw_shape_steps`), so the modal operator keeps the UI responsive.
+  Freestyle/Cycles still use every core for the rendering itself.
 Spawned workers re-import the caller's `__main__`: scripts that call `draw_collection` with
 jobs != 1 need the usual `if __name__ == "__main__":` guard.
 """
@@ -17,9 +21,12 @@ from __future__ import annotations
 
 import multiprocessing
 import os
+import queue as queue_module
+import signal
 import sys
-from pathlib import Path
 from concurrent.futures import FIRST_COMPLETED, ProcessPoolExecutor, wait
+from concurrent.futures.process import BrokenProcessPool
+from pathlib import Path
 from typing import Callable, Sequence
 
 import numpy as np
@@ -28,9 +35,10 @@ from ..cache import CODE_VERSION, DrawingCache, cache_key
 from ..drawings import ShapeDrawings
 from ..meshes import InputError, Mesh, normalise
 from ..params import DrawingSettings
-from ..progress import Cancelled  # noqa: F401  (raised here, re-exported for callers)
+from ..progress import Cancelled
 
 Progress = Callable[[str, int, int], None]
+WAIT_S = 0.1                # the parent's poll interval while workers render
 
 
 def in_blender_gui() -> bool:
@@ -50,16 +58,21 @@ def effective_jobs(jobs: int, n_tasks: int) -> int:
 
 # ---------------------------------------------------------------- worker side
 _worker_ready = False
+_worker_queue = None
 
 
-def _worker_init() -> None:
+def _worker_init(progress_queue=None) -> None:
     """Runs once in each spawned worker: a clean factory Blender.
 
     'spawn' hands the worker the parent's sys.path, which already holds the folders bpy adds
     when imported (its bundled `scripts/modules` has a `bpy` package of its own that shadows the
     real module and fails with "No module named '_bpy'"): drop those before importing bpy.
+    Ctrl-C in a terminal reaches the whole process group: workers ignore it and the parent,
+    which does get it, ends them.
     """
-    global _worker_ready
+    global _worker_ready, _worker_queue
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
+    _worker_queue = progress_queue
     sys.path[:] = [p for p in sys.path if "bpy" not in Path(p).parts]
     import bpy
     from .render import quiet_fds
@@ -70,9 +83,20 @@ def _worker_init() -> None:
 
 def _worker_draw(name: str, vertices: np.ndarray, faces: np.ndarray, settings: DrawingSettings,
                  threads: int) -> dict:
-    """Render one normalised mesh in a worker; plain arrays travel back (picklable)."""
-    from .render import draw_shape
-    return draw_shape(Mesh(name, vertices, faces), settings, threads=threads).to_arrays()
+    """Render one normalised mesh in a worker; plain arrays travel back (picklable). Each step
+    (a view) is reported to the parent through the progress queue."""
+    from .render import draw_shape_steps
+    steps = draw_shape_steps(Mesh(name, vertices, faces), settings, threads=threads)
+    while True:
+        try:
+            detail = next(steps)
+        except StopIteration as stop:
+            return stop.value.to_arrays()
+        if _worker_queue is not None:
+            try:
+                _worker_queue.put_nowait((name, detail))
+            except Exception:  # progress is best effort
+                pass
 
 
 # ---------------------------------------------------------------- parent side
@@ -84,26 +108,44 @@ def _describe(exc: BaseException) -> str:
 
 def draw_collection(meshes: Sequence[Mesh], settings: DrawingSettings, cache_dir=None, jobs: int = 0,
                     progress: Progress | None = None, cancel: Callable[[], bool] | None = None,
-                    ) -> tuple[list[ShapeDrawings], list[tuple[str, str]]]:
+                    worker=None) -> tuple[list[ShapeDrawings], list[tuple[str, str]]]:
     """Drawings of every mesh (in input order) and the shapes skipped as (name, reason).
+
+    `draw_steps` run to its end: `progress(stage, done, total)` at every step, `cancel()` polled
+    at every step (raises `Cancelled`).
+    """
+    progress = progress or (lambda stage, done, total: None)
+    cancel = cancel or (lambda: False)
+    steps = draw_steps(meshes, settings, cache_dir, jobs, worker=worker)
+    try:
+        while True:
+            try:
+                step = next(steps)
+            except StopIteration as stop:
+                return stop.value
+            progress(*step[:3])
+            if cancel():
+                raise Cancelled()
+    finally:
+        steps.close()
+
+
+def draw_steps(meshes: Sequence[Mesh], settings: DrawingSettings, cache_dir=None, jobs: int = 0,
+               worker=None):
+    """Generator: yields (stage, done, total, detail) steps; returns (drawings, skipped).
 
     Meshes are in world space; each is normalised with `settings.up` first. `cache_dir`: a folder,
     None for the default user cache, or False to use no cache. `jobs`: worker processes, 0 = all
-    cores, 1 = in this process. `progress(stage, done, total)` with stage 'cache' then 'render';
-    `cancel()` is polled between shapes and raises `Cancelled`.
+    cores, 1 = in this process. Stage 'cache' then 'render' (detail: the shape and its view).
+    Closing the generator (a cancel, Ctrl-C) ends the workers at once. `worker`: the function a
+    worker process runs per shape (tests substitute one that crashes).
     """
-    from .render import draw_shape
-    progress = progress or (lambda stage, done, total: None)
-    cancel = cancel or (lambda: False)
     cache = DrawingCache(cache_dir) if cache_dir is not False else None
-
     results: dict[int, ShapeDrawings] = {}
     skipped: dict[int, tuple[str, str]] = {}
     todo: list[tuple[int, Mesh, str | None]] = []
     total = len(meshes)
     for i, raw in enumerate(meshes):
-        if cancel():
-            raise Cancelled()
         try:
             mesh = normalise(raw, settings.up)
         except InputError as exc:
@@ -116,7 +158,7 @@ def draw_collection(meshes: Sequence[Mesh], settings: DrawingSettings, cache_dir
             results[i] = hit
         else:
             todo.append((i, mesh, key))
-        progress("cache", i + 1, total)
+        yield ("cache", i + 1, total, None)
 
     def finish(i: int, key: str | None, drawings: ShapeDrawings) -> None:
         drawings.name = meshes[i].name
@@ -125,41 +167,116 @@ def draw_collection(meshes: Sequence[Mesh], settings: DrawingSettings, cache_dir
         results[i] = drawings
 
     n_workers = effective_jobs(jobs, len(todo))
-    done = 0
-    progress("render", 0, len(todo))
+    yield ("render", 0, len(todo), None)
     if n_workers <= 1:
-        for i, mesh, key in todo:
-            if cancel():
-                raise Cancelled()
+        from .render import draw_shape_steps
+        for done, (i, mesh, key) in enumerate(todo):
+            steps = draw_shape_steps(mesh, settings)
             try:
-                finish(i, key, draw_shape(mesh, settings))
+                while True:
+                    try:
+                        detail = next(steps)
+                    except StopIteration as stop:
+                        finish(i, key, stop.value)
+                        break
+                    yield ("render", done, len(todo), f"'{mesh.name}' {detail}")
             except Exception as exc:  # one bad shape must not sink the collection
                 skipped[i] = (mesh.name, _describe(exc))
-            done += 1
-            progress("render", done, len(todo))
+            finally:
+                steps.close()
+            yield ("render", done + 1, len(todo), None)
     else:
-        # Cycles threads per worker: share the cores rather than oversubscribe them.
-        threads = max(1, (os.cpu_count() or 1) // n_workers)
-        ctx = multiprocessing.get_context("spawn")
-        pool = ProcessPoolExecutor(max_workers=n_workers, mp_context=ctx, initializer=_worker_init)
-        try:
-            pending = {pool.submit(_worker_draw, m.name, m.vertices, m.faces, settings, threads): (i, m, k)
-                       for i, m, k in todo}
-            while pending:
-                finished, _ = wait(pending, return_when=FIRST_COMPLETED, timeout=0.5)
-                if cancel():
-                    raise Cancelled()
-                for fut in finished:
-                    i, mesh, key = pending.pop(fut)
-                    try:
-                        finish(i, key, ShapeDrawings.from_arrays(fut.result()))
-                    except Exception as exc:
-                        skipped[i] = (mesh.name, _describe(exc))
-                    done += 1
-                    progress("render", done, len(todo))
-        finally:
-            pool.shutdown(wait=True, cancel_futures=True)
+        yield from _render_in_workers(todo, settings, n_workers, finish, skipped,
+                                      worker or _worker_draw)
 
     order = sorted(results)
     return [results[i] for i in order], [skipped[i] for i in sorted(skipped)]
 
+
+def _end_pool(pool: ProcessPoolExecutor, now: bool) -> None:
+    """Shut a pool down; `now`: terminate its workers instead of letting them finish."""
+    procs = list((getattr(pool, "_processes", None) or {}).values())
+    if not now:
+        pool.shutdown(wait=True, cancel_futures=True)
+        return
+    for p in procs:
+        if p.is_alive():
+            p.terminate()
+    pool.shutdown(wait=False, cancel_futures=True)
+    for p in procs:
+        p.join(timeout=5)
+        if p.is_alive():
+            p.kill()
+
+
+def _render_in_workers(todo, settings, n_workers, finish, skipped, worker):
+    """Generator: render `todo` in spawned worker processes, at most n_workers shapes at a time.
+
+    A worker that dies breaks its pool: the shapes it was rendering each get one retry alone in a
+    fresh worker (alone, so a second crash is surely theirs); a shape whose retry dies too is
+    skipped with the reason. The other shapes carry on in a new pool.
+    """
+    threads = max(1, (os.cpu_count() or 1) // n_workers)   # share the cores, never oversubscribe
+    ctx = multiprocessing.get_context("spawn")
+    progress_queue = ctx.Queue()
+    waiting = list(todo)        # not started yet
+    retries: list = []          # were rendering when a worker died: one retry each, alone
+    done, total = 0, len(todo)
+    detail = None               # the latest view a worker reported
+    try:
+        while waiting or retries:
+            alone = bool(retries)
+            group = [retries.pop(0)] if alone else waiting
+            if not alone:
+                waiting = []
+            width = 1 if alone else n_workers
+            pool = ProcessPoolExecutor(max_workers=width, mp_context=ctx, initializer=_worker_init,
+                                       initargs=(progress_queue,))
+            running: dict = {}
+            ok = False
+            try:
+                while group or running:
+                    while group and len(running) < width:
+                        item = group.pop(0)
+                        _, m, _ = item
+                        running[pool.submit(worker, m.name, m.vertices, m.faces, settings,
+                                            threads)] = item
+                    finished, _ = wait(running, timeout=WAIT_S, return_when=FIRST_COMPLETED)
+                    while True:
+                        try:
+                            name, what = progress_queue.get_nowait()
+                            detail = f"'{name}' {what}"
+                        except (queue_module.Empty, OSError, EOFError, ValueError):
+                            break
+                    broken = False
+                    for fut in finished:
+                        i, mesh, key = running.pop(fut)
+                        try:
+                            finish(i, key, ShapeDrawings.from_arrays(fut.result()))
+                        except BrokenProcessPool:
+                            broken = True
+                            running[fut] = (i, mesh, key)
+                            continue
+                        except Exception as exc:
+                            skipped[i] = (mesh.name, _describe(exc))
+                        done += 1
+                    if broken:
+                        for i, mesh, key in running.values():
+                            if alone:
+                                skipped[i] = (mesh.name, "its drawing worker crashed twice "
+                                              "(Blender stopped while drawing it)")
+                                done += 1
+                            else:
+                                retries.append((i, mesh, key))
+                        running.clear()
+                        waiting = group + waiting   # the rest goes on in a fresh pool
+                        group = []
+                        break
+                    yield ("render", done, total, detail)
+                ok = True
+            finally:
+                _end_pool(pool, now=not ok)
+            yield ("render", done, total, None)
+    finally:
+        progress_queue.close()
+        progress_queue.cancel_join_thread()

@@ -1,8 +1,10 @@
 """`analyze INPUT --out DIR`: the product's main job, headless.
 
-Loads the shapes (a .blend, or a folder of mesh files), checks every constraint before any work,
-runs the job with progress on stderr, writes the results onto the objects and saves them as
-DIR/result.blend (never over the input), then DIR/report.json and DIR/report.html.
+Checks every argument and the output folder (`options`), loads the shapes (a .blend, or a folder
+of mesh files) and the constraint files, runs the job with progress on stderr, writes the results
+onto the objects and saves DIR/result.blend, DIR/report.json and DIR/report.html into a
+temporary folder beside DIR that then replaces DIR whole (`options.publish`): DIR holds a complete
+previous result or the complete new one, and never an input.
 """
 from __future__ import annotations
 
@@ -11,23 +13,11 @@ import sys
 import time
 from pathlib import Path
 
-from .. import constraints, report
+from .. import report
 from ..meshes import InputError, normalise
-from ..params import AnalysisParams
+from ..options import PARAMETERS, build_options, check_output, load_constraints, publish
 from . import scene
-from .job import JobOptions, run_steps
-
-
-def parse_clusters(text: str) -> int | None:
-    if str(text).lower() == "auto":
-        return None
-    try:
-        k = int(text)
-    except ValueError:
-        k = 0
-    if k < 2:
-        raise InputError(f"--clusters must be 'auto' or a whole number of at least 2, not '{text}'")
-    return k
+from .job import run_steps
 
 
 def load_input(path: str, collection: str | None):
@@ -52,51 +42,58 @@ def load_input(path: str, collection: str | None):
 
 
 class StderrProgress:
-    """One line per step on stderr: stage, i of n, elapsed, estimate for the stage."""
+    """Progress lines on stderr: stage, i of n, elapsed, estimate for the stage.
 
-    def __init__(self, stream=sys.stderr):
+    A line when a stage starts or ends, and within a stage at most every `every` seconds, so a
+    long stage (or a long shape, whose steps carry a detail such as its view) is never silent
+    and a short one is not noisy."""
+
+    def __init__(self, stream=sys.stderr, every: float = 1.0):
         self.stream = stream
         self.start = time.perf_counter()
         self.stage_start = {}
         self.last = None
+        self.last_line = -1e9
+        self.every = every
 
-    def __call__(self, stage: str, done: int, total: int) -> None:
-        if (stage, done) == self.last:
+    def __call__(self, stage: str, done: int, total: int, detail: str | None = None) -> None:
+        now = time.perf_counter()
+        new_stage = self.last is None or self.last[0] != stage
+        if not (new_stage or done == total and self.last != (stage, done)
+                or now - self.last_line >= self.every):
             return
         self.last = (stage, done)
-        now = time.perf_counter()
         t0 = self.stage_start.setdefault(stage, now)
         eta = ""
         if 0 < done < total:
             eta = f", about {(now - t0) / done * (total - done):.0f} s left in this stage"
-        self.stream.write(f"[{now - self.start:7.1f} s] {stage} {done}/{total}{eta}\n")
+        more = f" ({detail})" if detail else ""
+        self.stream.write(f"[{now - self.start:7.1f} s] {stage} {done}/{total}{more}{eta}\n")
         self.stream.flush()
+        self.last_line = now
 
 
 def run(args) -> int:
     import bpy
 
-    clusters = parse_clusters(args.clusters)
-    out = Path(args.out)
+    # 1. every argument and the output folder, before anything is loaded or rendered
+    options = build_options(
+        renderer=args.renderer, up=args.up, suggestive_contours=args.suggestive_contours,
+        jobs=args.jobs, cache_dir=args.cache, seed=args.seed, clusters=args.clusters,
+        method=args.method, labels=args.labels, triplets=args.triplets,
+        **{option: getattr(args, option) for option in PARAMETERS})
+    options.jobs = options.jobs or (os.cpu_count() or 1)
+    out = check_output(args.out, inputs=(args.input, args.labels, args.triplets),
+                       cache_dir=args.cache)
+    # 2. the shapes and the constraint files that name them; the job checks the rest
+    # (analysable shapes, cluster count) before its first render
+    progress = StderrProgress()
     meshes = load_input(args.input, args.collection)
     if not meshes:
         raise InputError(f"'{args.input}' contains no mesh")
-    names = [m.name for m in meshes]
-    labels = constraints.read_labels_csv(args.labels, names) if args.labels else None
-    triplets = constraints.read_triplets_csv(args.triplets, names) if args.triplets else None
-    if out.resolve() == Path(args.input).resolve():
-        raise InputError("--out must not be the input itself")
-    out.mkdir(parents=True, exist_ok=True)
-
-    params = AnalysisParams(n_representatives=args.representatives, n_clusters=clusters,
-                            eta=args.eta, lam=args.lam, beta=args.beta, gamma=args.gamma,
-                            mu=args.mu, max_rounds=args.rounds, random_state=args.seed)
-    options = JobOptions(renderer=args.renderer, up=args.up,
-                         suggestive_contours=args.suggestive_contours,
-                         jobs=args.jobs or (os.cpu_count() or 1), cache_dir=args.cache,
-                         seed=args.seed, params=params, labels=labels, triplets=triplets)
-    progress = StderrProgress()
+    load_constraints(options, [m.name for m in meshes])
     progress("load", len(meshes), len(meshes))
+
     steps = run_steps(meshes, options)
     while True:
         try:
@@ -107,13 +104,19 @@ def run(args) -> int:
     for name, reason in job.skipped:
         print(f"warning: skipped '{name}': {reason}", file=sys.stderr)
 
-    from .writeback import write_results
-    write_results(bpy.context.scene, job)
-    bpy.ops.wm.save_as_mainfile(filepath=str((out / "result.blend").resolve()), copy=True)
-    report.write_json(job.report, out / "report.json")
-    by_name = {m.name: m for m in meshes}
-    normalised = [normalise(by_name[s.name], args.up) for s in job.shapes]
-    report.write_html(job, normalised, out)
+    # 3. results: written into a temporary folder beside --out, then moved into place whole
+    def write(folder: Path) -> None:
+        from .writeback import write_results
+        write_results(bpy.context.scene, job, progress=progress)
+        progress("save result.blend", 0, 1)
+        bpy.ops.wm.save_as_mainfile(filepath=str((folder / "result.blend").resolve()), copy=True)
+        progress("save result.blend", 1, 1)
+        report.write_json(job.report, folder / "report.json")
+        by_name = {m.name: m for m in meshes}
+        normalised = [normalise(by_name[s.name], args.up) for s in job.shapes]
+        report.write_html(job, normalised, folder, progress=progress)
+
+    publish(out, write)
     summary = f"{len(job.shapes)} shapes in {len(job.clusters)} clusters"
     if "scores" in job.report:
         s = job.report["scores"]["style"]

@@ -6,9 +6,13 @@ between steps (`bpy.app.timers` do not fire in background mode, see BLENDER_NOTE
 touches the user's scene: the result is plain data, written back by `writeback` only once the
 whole run has succeeded, so a cancelled or failed run changes nothing.
 
-Long global stages (the analysis) run in a worker thread while the generator keeps yielding
-their progress; they are pure numpy and never touch bpy. Rendering touches bpy, so it runs in
-this thread shape by shape (jobs=1) or in worker processes (jobs>1).
+Where rendering happens is decided before it starts (`batch.draw_steps`): in worker processes
+(jobs > 1 with Blender as a module), or else in this thread, one view per step. bpy never runs on
+another thread. Only the global analysis, pure numpy that never touches bpy, runs in a worker
+thread while the generator keeps yielding its progress.
+
+Steps are (stage, done, total) or (stage, done, total, detail), detail a short text about the
+work inside the current unit (which shape, which view).
 """
 from __future__ import annotations
 
@@ -20,36 +24,12 @@ import numpy as np
 
 from .. import localisation, metrics
 from ..meshes import InputError, Mesh, normalisation, normalise, to_world, validate
-from ..params import AnalysisParams, DrawingSettings, LocalisationParams
+from ..options import JobOptions, check_coordinates, check_shapes  # noqa: F401 (re-exported)
 from ..progress import Cancelled
 from ..rig import Rig
 from . import batch
 
 STAGES = ("render", "analyse", "localise")
-
-
-@dataclass
-class JobOptions:
-    renderer: str = "freestyle"
-    up: str = "z"
-    suggestive_contours: bool = False
-    jobs: int = 0                       # 0: all cores
-    cache_dir: str | None = None
-    seed: int = 0
-    params: AnalysisParams = field(default_factory=AnalysisParams)
-    localisation: LocalisationParams = field(default_factory=LocalisationParams)
-    labels: dict | None = None          # name -> style
-    triplets: list | None = None        # (a, b, c): a closer in style to b than to c
-    n_seeds: int = 30                   # seeds per shape for the analysis (paper 4.1)
-    cancel: object = None               # optional callable -> bool, polled at every step
-
-    def drawing_settings(self) -> DrawingSettings:
-        # localisation uses three times as many seeds; seeds come in farthest-point order, so the
-        # first n_seeds of them are themselves an evenly spread set for the analysis
-        return DrawingSettings(renderer=self.renderer, up=self.up,
-                               suggestive_contours=self.suggestive_contours,
-                               n_seeds=self.n_seeds * self.localisation.seed_multiplier,
-                               seed=self.seed)
 
 
 @dataclass
@@ -74,18 +54,6 @@ class JobResult:
     analysis: object = None             # pipeline.AnalysisResult
     drawings: list = field(default_factory=list)
     localisations: list = field(default_factory=list)
-
-
-def check_constraints(names: list[str], labels: dict | None, triplets: list | None,
-                      skipped: dict[str, str]) -> None:
-    """Refuse constraints that name shapes not being analysed, before any work starts."""
-    known = set(names)
-    mentioned = set(labels or ()) | {n for t in (triplets or ()) for n in t}
-    missing = sorted(mentioned - known)
-    if not missing:
-        return
-    why = [f"'{n}' ({skipped[n]})" if n in skipped else f"'{n}'" for n in missing]
-    raise InputError("constraints name shapes that are not in the analysed set: " + ", ".join(why))
 
 
 def camera_matrix(rig: Rig, view: int, centre, radius: float, up: str) -> list:
@@ -116,9 +84,12 @@ def _in_thread(fn, progress_box: list, cancel_flag: threading.Event):
         while t.is_alive():
             t.join(0.1)
             yield progress_box[0]
-    except GeneratorExit:
+    except GeneratorExit:       # a cancel: let the thread see the flag and stop
         cancel_flag.set()
         t.join()
+        raise
+    except BaseException:       # Ctrl-C: the thread is a daemon, do not wait for it
+        cancel_flag.set()
         raise
     if "error" in out:
         raise out["error"]
@@ -146,20 +117,16 @@ def _run_steps(meshes: list[Mesh], options: JobOptions):
     skipped: dict[str, str] = {}
     good: list[Mesh] = []
     for m in meshes:
-        if not np.all(np.isfinite(m.vertices)):
-            validate(m)  # corrupt coordinates: refuse the run, naming the shape
+        check_coordinates(m)  # corrupt coordinates: refuse the run, naming the shape
         try:
             validate(m)
             good.append(m)
         except InputError as exc:  # no faces, degenerate: skipped, listed in the report
             skipped[m.name] = str(exc).replace(f"'{m.name}' ", "")
-    check_constraints([m.name for m in good], options.labels, options.triplets, skipped)
-    if len(good) < 2:
-        raise InputError("need at least two analysable meshes, found %d%s" % (
-            len(good), (" (skipped: " + "; ".join(f"'{k}' {v}" for k, v in skipped.items()) + ")")
-            if skipped else ""))
+    # every check that needs the shapes, before the first render
+    check_shapes(options, [m.name for m in good], skipped)
 
-    # 1. drawings (per shape, cached)
+    # 1. drawings (per shape, cached): in worker processes or, one view per step, right here
     settings = options.drawing_settings()
     t0 = time.perf_counter()
     cancel_flag = threading.Event()
@@ -172,27 +139,14 @@ def _run_steps(meshes: list[Mesh], options: JobOptions):
     def progress(stage, done, total):
         box[0] = (stage, done, total)
 
-    if options.jobs == 1:
-        drawings = []
-        for i, m in enumerate(good):
-            yield ("render", i, len(good))
-            d, bad = batch.draw_collection([m], settings, options.cache_dir, jobs=1)
-            drawings += d
-            skipped.update(dict(bad))
-    else:
-        drawings, bad = yield from _in_thread(
-            lambda: batch.draw_collection(good, settings, options.cache_dir, jobs=options.jobs,
-                                          progress=progress, cancel=stop),
-            box, cancel_flag)
-        skipped.update(dict(bad))
+    drawings, bad = yield from batch.draw_steps(good, settings, options.cache_dir,
+                                                jobs=options.jobs)
+    skipped.update(dict(bad))
     timings["render"] = time.perf_counter() - t0
     by_name = {d.name: d for d in drawings}
     good = [m for m in good if m.name in by_name]
     drawings = [by_name[m.name] for m in good]
-    check_constraints([m.name for m in good], options.labels, options.triplets, skipped)
-    if len(good) < 2:
-        raise InputError("fewer than two meshes could be drawn: " +
-                         "; ".join(f"'{k}' {v}" for k, v in skipped.items()))
+    check_shapes(options, [m.name for m in good], skipped)   # some shapes may not draw
 
     # 2. the analysis, on the first n_seeds seeds of each shape; the HOG maps are computed
     # once here because the style regions (stage 3) read them too

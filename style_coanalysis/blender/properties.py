@@ -19,6 +19,8 @@ import bpy
 from bpy.props import (BoolProperty, CollectionProperty, EnumProperty, FloatProperty,
                        FloatVectorProperty, IntProperty, PointerProperty, StringProperty)
 
+from ..options import DEFAULTS, default, help_text
+
 # The extension's root package ("bl_ext.<repo>.<id>" when installed): AddonPreferences are looked up
 # under it. This module is <root>.style_coanalysis.blender.properties.
 ROOT_PACKAGE = __package__.rsplit(".", 2)[0]
@@ -28,9 +30,16 @@ RENDERERS = (
     ("lineart", "Line Art", "Fast line drawings (Grease Pencil Line Art, no suggestive contours)"),
 )
 
-# The paper's parameter values (also AnalysisParams' defaults); one place for the UI.
-PAPER_DEFAULTS = dict(n_representatives=50, eta=0.2, lam=20.0, beta=0.05, gamma=10.0, mu=0.07,
-                      max_rounds=5)
+# The Advanced panel's properties: defaults and descriptions come from options.PARAMETERS, i.e.
+# from params.AnalysisParams (the one place that holds the paper's values).
+PARAMETER_PROPS = {"representatives": "n_representatives", "eta": "eta", "lam": "lam",
+                   "beta": "beta", "gamma": "gamma", "mu": "mu", "rounds": "max_rounds"}
+METHODS = (("default", "Default", "This extension's method (see the README)"),
+           ("paper", "Paper", "The paper's method, sections 3-4.5 as written"))
+
+
+def _param(option: str) -> dict:
+    return dict(default=default(option), description=help_text(option)[:1].upper() + help_text(option)[1:])
 
 
 def default_cache_dir() -> str:
@@ -176,25 +185,21 @@ class StyleSettings(bpy.types.PropertyGroup):
     up: EnumProperty(name="Up Axis", default="z", items=(("z", "Z", "Z up"), ("y", "Y", "Y up")))
     auto_clusters: BoolProperty(name="Automatic", default=True,
                                 description="Choose the number of style clusters automatically")
-    n_clusters: IntProperty(name="Clusters", default=2, min=1, max=100)
+    n_clusters: IntProperty(name="Clusters", default=2, min=2, max=100,
+                            description="Number of style clusters (at most the number of shapes)")
     seed: IntProperty(name="Seed", default=0, min=0)
 
     # Paper parameters (Advanced).
+    method: EnumProperty(name="Method", items=METHODS, default=DEFAULTS.method,
+                         description="Which method analyses the shapes")
     n_representatives: IntProperty(name="Representatives", min=2, max=1000,
-                                   default=PAPER_DEFAULTS["n_representatives"],
-                                   description="k-means patch representatives per view (paper: 50)")
-    eta: FloatProperty(name="Eta", min=0.0, max=1.0, default=PAPER_DEFAULTS["eta"],
-                       description="Shared proportion of latent factors Kc/K (paper: 0.2)")
-    lam: FloatProperty(name="Lambda", min=0.0, default=PAPER_DEFAULTS["lam"],
-                       description="Smoothness of the view weights (paper: 20)")
-    beta: FloatProperty(name="Beta", min=0.0, default=PAPER_DEFAULTS["beta"], precision=3,
-                        description="Weight of the label term (paper: about 0.05)")
-    gamma: FloatProperty(name="Gamma", min=0.0, default=PAPER_DEFAULTS["gamma"],
-                         description="l2,1 penalty on W (paper: about 10)")
-    mu: FloatProperty(name="Mu", min=0.0, max=1.0, default=PAPER_DEFAULTS["mu"], precision=3,
-                      description="Patch reselection threshold (paper: 0.07)")
-    max_rounds: IntProperty(name="Rounds", min=1, max=50, default=PAPER_DEFAULTS["max_rounds"],
-                            description="Cluster-and-reselect rounds at most (paper: until stable)")
+                                   **_param("representatives"))
+    eta: FloatProperty(name="Eta", min=0.001, max=1.0, **_param("eta"))
+    lam: FloatProperty(name="Lambda", min=0.0, **_param("lam"))
+    beta: FloatProperty(name="Beta", min=0.0, precision=3, **_param("beta"))
+    gamma: FloatProperty(name="Gamma", min=0.0, **_param("gamma"))
+    mu: FloatProperty(name="Mu", min=0.0, max=1.0, precision=3, **_param("mu"))
+    max_rounds: IntProperty(name="Rounds", min=1, max=50, **_param("rounds"))
 
     # Decimation.
     decimate_ratio: FloatProperty(name="Ratio", min=0.0, max=1.0, default=0.3, subtype="FACTOR",

@@ -211,25 +211,44 @@ def _setup_freestyle(ts: TempScene, settings: DrawingSettings, threads: int) -> 
     ls.select_suggestive_contour = bool(settings.suggestive_contours)
 
 
-def _render_freestyle(ts: TempScene, settings: DrawingSettings, threads: int) -> np.ndarray:
-    _setup_freestyle(ts, settings, threads)
+def _render_freestyle_steps(ts: TempScene, settings: DrawingSettings, threads: int):
+    """Generator: one view rendered per step (yields the view index); returns the images.
+
+    C-level output is silenced per view, never across a yield: between steps Blender's own
+    output (and the caller's) must reach the terminal."""
+    with quiet_fds():
+        _setup_freestyle(ts, settings, threads)
     sc = ts.scene
     size = settings.image_size
     images = np.zeros((len(ts.cameras), size, size), np.float32)
     with tempfile.TemporaryDirectory(prefix="sca_render_") as tmp:
-        with quiet_fds() as log:
-            for v, cam in enumerate(ts.cameras):
-                sc.camera = cam
-                path = os.path.join(tmp, f"view_{v:02d}.png")
-                sc.render.filepath = path
+        for v, cam in enumerate(ts.cameras):
+            sc.camera = cam
+            path = os.path.join(tmp, f"view_{v:02d}.png")
+            sc.render.filepath = path
+            with quiet_fds() as log:
                 bpy.ops.render.render(write_still=True, scene=sc.name)
                 if not os.path.exists(path):
                     log.seek(0)
                     tail = log.read()[-2000:].decode("utf-8", "replace")
                     raise RuntimeError(f"Freestyle wrote no image for view {v}:\n{tail}")
-                rgba = io.imread(path)
-                images[v] = rgba[..., 3].astype(np.float32) / 255.0
+            rgba = io.imread(path)
+            images[v] = rgba[..., 3].astype(np.float32) / 255.0
+            yield v
     return images
+
+
+def _render_freestyle(ts: TempScene, settings: DrawingSettings, threads: int) -> np.ndarray:
+    return _run(_render_freestyle_steps(ts, settings, threads))
+
+
+def _run(gen):
+    """Run a step generator to its end; its return value."""
+    while True:
+        try:
+            next(gen)
+        except StopIteration as stop:
+            return stop.value
 
 
 # ---------------------------------------------------------------- Line Art
@@ -338,7 +357,8 @@ def _bvh(mesh: Mesh) -> BVHTree:
 
 
 def ray_visibility(tree: BVHTree, rig: Rig, points: np.ndarray,
-                   own_face=None, faces: np.ndarray | None = None) -> np.ndarray:
+                   own_face=None, faces: np.ndarray | None = None, views=None,
+                   first_index: int = 0) -> np.ndarray:
     """(V, N) bool: is each point the first thing each camera's ray to it meets?
 
     A ray from the camera centre to the point counts it visible when it hits nothing (grazing
@@ -349,6 +369,8 @@ def ray_visibility(tree: BVHTree, rig: Rig, points: np.ndarray,
     """
     points = np.asarray(points, np.float64).reshape(-1, 3)
     locs = rig.locations()
+    if views is not None:
+        locs = [locs[v] for v in views]
     vis = np.zeros((len(locs), len(points)), bool)
     if len(points) == 0:
         return vis
@@ -370,12 +392,16 @@ def ray_visibility(tree: BVHTree, rig: Rig, points: np.ndarray,
             ok |= hit_f == np.asarray(own_face)
         elif faces is not None:
             hf = np.where(hit_f >= 0, hit_f, 0)
-            ok |= (hit_f >= 0) & (faces[hf] == np.arange(len(points))[:, None]).any(axis=1)
+            own = np.arange(first_index, first_index + len(points))[:, None]
+            ok |= (hit_f >= 0) & (faces[hf] == own).any(axis=1)
         vis[v] = ok
     return vis
 
 
 # ---------------------------------------------------------------- entry point
+VISIBILITY_CHUNK = 20000    # ray casts per step: well under half a second here
+
+
 def draw_lines(mesh: Mesh, settings: DrawingSettings, threads: int = 0) -> np.ndarray:
     """The (V, H, W) ink images alone, with the chosen renderer (no seeds, no visibility)."""
     rig = rig_for(settings)
@@ -391,21 +417,56 @@ def draw_shape(mesh: Mesh, settings: DrawingSettings, threads: int = 0) -> Shape
     `threads` caps Cycles' render threads (0: Blender's automatic choice); parallel workers
     pass 1 so that they do not fight over the cores.
     """
+    return _run(draw_shape_steps(mesh, settings, threads))
+
+
+def draw_shape_steps(mesh: Mesh, settings: DrawingSettings, threads: int = 0):
+    """`draw_shape` as a generator of short steps, for Blender's main thread.
+
+    Yields a short description of the step just done ("view 3/12", "visibility 2/12");
+    returns the ShapeDrawings. Each step is one rendered view, one Line Art evaluation (all
+    views at once, it is fast) or at most VISIBILITY_CHUNK ray casts, so a caller that runs
+    one step per UI event never blocks the interface for long. Closing the generator removes
+    the temporary scene.
+    """
     if settings.renderer not in ("freestyle", "lineart"):
         raise InputError(f"unknown renderer '{settings.renderer}' (use 'freestyle' or 'lineart')")
     if len(mesh.faces) == 0:
         raise InputError(f"'{mesh.name}' has no faces")
     rig = rig_for(settings)
     tree = _bvh(mesh)
+    n_views = rig.n_views
 
     def seen_somewhere(points, faces):
         return ray_visibility(tree, rig, points, own_face=faces).any(axis=0)
 
     seeds, seed_faces = sample_seeds(mesh, settings.n_seeds, settings.seed, keep=seen_somewhere)
     seed_visible = ray_visibility(tree, rig, seeds, own_face=seed_faces)
-    vertex_visible = ray_visibility(tree, rig, mesh.vertices, faces=mesh.faces)
+    yield "seeds"
+    n = len(mesh.vertices)
+    vertex_visible = np.zeros((n_views, n), bool)
+    for v in range(n_views):
+        for start in range(0, n, VISIBILITY_CHUNK):
+            stop = min(n, start + VISIBILITY_CHUNK)
+            vertex_visible[v, start:stop] = ray_visibility(
+                tree, rig, mesh.vertices[start:stop], faces=mesh.faces,
+                views=[v], first_index=start)[0]
+            yield f"visibility {v + 1}/{n_views}"
     seed_pixels, _ = project(rig.matrices(), seeds)
-    images = draw_lines(mesh, settings, threads)
+    with TempScene(mesh, rig) as ts:
+        yield "scene"
+        if settings.renderer == "freestyle":
+            steps = _render_freestyle_steps(ts, settings, threads)
+            while True:
+                try:
+                    v = next(steps)
+                except StopIteration as stop:
+                    images = stop.value
+                    break
+                yield f"view {v + 1}/{n_views}"
+        else:
+            images = _render_lineart(ts, settings, rig)
+            yield f"views {n_views}/{n_views}"
     return ShapeDrawings(
         name=mesh.name, images=images, cameras=rig.matrices(), seeds=seeds, seed_faces=seed_faces,
         seed_visible=seed_visible, seed_pixels=seed_pixels.astype(np.float32),

@@ -103,27 +103,52 @@ def _remove_objects(names) -> None:
             bpy.data.meshes.remove(data)
 
 
+FORMAT_NAMES = {".obj": "OBJ", ".ply": "PLY", ".stl": "STL", ".gltf": "glTF", ".glb": "glTF"}
+
+
 def import_mesh_file(path) -> Mesh:
-    """One shape from one file (all its mesh objects joined), named by the file stem."""
+    """One shape from one file (all its mesh objects joined), named by the file stem.
+
+    One rule for every format: a file that is not a mesh of its type (the importer fails, or
+    finds no mesh with a vertex in it) raises InputError naming the file, and so does a file
+    with NaN, infinite or absurd coordinates, which Blender's importers would silently read as 0
+    (`filecheck`). The importers' own output (pages of warnings on garbage) is kept off the
+    terminal. A mesh with vertices but no faces is returned as it is: the job skips it.
+    """
+    from ..filecheck import bad_coordinates
+    from ..options import COORDINATE_LIMIT
+    from .render import quiet_fds
     path = os.fspath(path)
     stem = os.path.splitext(os.path.basename(path))[0]
+    kind = FORMAT_NAMES.get(os.path.splitext(path)[1].lower(), "mesh")
+    bad = bad_coordinates(path)
+    if bad:
+        raise InputError(f"{path}: '{stem}' has {bad} vertices with NaN, infinite or absurd "
+                         f"(beyond {COORDINATE_LIMIT:g}) coordinates (Blender's importer would "
+                         "read them as 0)")
     before = set(bpy.data.objects.keys())
     try:
-        _import_one(path)
+        with quiet_fds():
+            _import_one(path)
     except RuntimeError as exc:
         _remove_objects(set(bpy.data.objects.keys()) - before)
-        first = str(exc).strip().splitlines()[0] if str(exc).strip() else "importer failed"
-        raise InputError(f"{path}: cannot import ({first})") from None
+        lines = [ln.strip() for ln in str(exc).strip().splitlines() if ln.strip()]
+        why = lines[0] if lines else "the importer failed"
+        if why.startswith("Error: "):
+            why = why[len("Error: "):]
+        raise InputError(f"{path}: not a readable {kind} file ({why})") from None
     new = sorted(set(bpy.data.objects.keys()) - before)
     try:
         depsgraph = bpy.context.evaluated_depsgraph_get()
         parts = [mesh_from_object(bpy.data.objects[n], depsgraph) for n in new
                  if bpy.data.objects[n].type == "MESH"]
+        if not any(len(p.vertices) for p in parts):
+            raise InputError(f"{path}: not a readable {kind} file (no mesh in it)")
         with_faces = [p for p in parts if len(p.faces)]
         if not with_faces:
             # not an import failure: the shape exists but cannot be analysed; the job skips it
             # with a warning and lists it in the report
-            verts = np.concatenate([p.vertices for p in parts]) if parts else np.zeros((0, 3))
+            verts = np.concatenate([p.vertices for p in parts])
             return Mesh(stem, verts, np.zeros((0, 3), np.int32), source=path)
         parts = with_faces
         offsets = np.cumsum([0] + [len(p.vertices) for p in parts[:-1]])

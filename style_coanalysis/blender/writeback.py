@@ -183,8 +183,11 @@ def _write_mesh(obj, weights: np.ndarray, material) -> int:
     return int(styled.sum())
 
 
-def write_results(scene, result, collection_prefix: str = "Style") -> dict:
+def write_results(scene, result, collection_prefix: str = "Style", progress=None) -> dict:
     """Replace whatever an earlier run wrote in `scene` with `result` (a JobResult).
+
+    `progress(stage, done, total)`, if given, is called per mesh written (large meshes take
+    seconds each).
 
     Raises WritebackError naming the objects before changing anything if the result does not fit
     the scene. Returns a summary: objects written, meshes written, shared meshes, highlighted
@@ -199,7 +202,9 @@ def write_results(scene, result, collection_prefix: str = "Style") -> dict:
         by_mesh[scene.objects[shape.name].data.name].append(shape)
 
     highlighted, shared = {}, []
-    for mesh_name, shapes in by_mesh.items():
+    for k, (mesh_name, shapes) in enumerate(by_mesh.items()):
+        if progress is not None:
+            progress("write", k, len(by_mesh))
         if len(shapes) > 1:
             shared.append(mesh_name)
         weights = np.mean([np.asarray(s.vertex_weights, dtype=np.float32).reshape(-1)
@@ -245,6 +250,8 @@ def write_results(scene, result, collection_prefix: str = "Style") -> dict:
         skipped = f", {len(result.skipped)} skipped" if result.skipped else ""
         settings.last_report = (f"{len(result.shapes)} shapes in {len(cluster_ids)} clusters"
                                 f"{skipped}")
+    if progress is not None:
+        progress("write", len(by_mesh), len(by_mesh))
     return {"objects": len(result.shapes), "meshes": len(by_mesh), "shared_meshes": shared,
             "highlighted_faces": highlighted, "clusters": len(cluster_ids)}
 
