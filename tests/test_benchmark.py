@@ -1,0 +1,167 @@
+"""The benchmark's own pieces (no Blender, no drawings): constraint draws, subsets, summaries."""
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from style_coanalysis.evaluation import benchmark as B
+
+
+def _styles(counts):
+    return np.array([s for s, n in counts.items() for _ in range(n)])
+
+
+def test_two_labels_per_style():
+    styles = _styles({"a": 10, "b": 7, "c": 2, "d": 1})
+    for seed in range(5):
+        idx = B.pick_labels(styles, np.random.default_rng(seed), per_style=2)
+        got = dict(zip(*np.unique(styles[idx], return_counts=True)))
+        assert got == {"a": 2, "b": 2, "c": 2, "d": 1}
+        assert len(set(idx)) == len(idx)
+
+
+@pytest.mark.parametrize("fraction", [0.1, 0.2])
+def test_fraction_labels_cover_every_style(fraction):
+    styles = _styles({"a": 40, "b": 30, "c": 5, "d": 3})
+    for seed in range(10):
+        idx = B.pick_labels(styles, np.random.default_rng(seed), fraction=fraction)
+        assert set(styles[idx]) == set(styles)
+        assert len(idx) == max(4, round(fraction * len(styles)))
+        assert len(set(idx)) == len(idx)
+    # too small a fraction still gives one of each style
+    assert len(B.pick_labels(styles, np.random.default_rng(0), fraction=0.01)) == 4
+
+
+def test_triplets_are_label_consistent_and_distinct():
+    styles = _styles({"a": 9, "b": 3, "c": 1})
+    t = B.pick_triplets(styles, 300, np.random.default_rng(0))
+    assert len(t) == 300 and len(set(t)) == 300
+    for a, b, c in t:
+        assert a != b and styles[a] == styles[b] != styles[c]
+
+
+def test_mode_constraints_same_for_every_method_and_seeded():
+    styles = _styles({"a": 12, "b": 12, "c": 12})
+    names = [f"s{i}" for i in range(len(styles))]
+    k, lab, trip, idx = B.constraints_for("labels-2", styles, names, 0)
+    assert k is None and trip is None and len(lab) == 6 and sorted(lab.values()) == list("aabbcc")
+    assert B.constraints_for("labels-2", styles, names, 0)[1] == lab
+    assert B.constraints_for("labels-2", styles, names, 1)[1] != lab
+    k, lab, trip, _ = B.constraints_for("triplets-50", styles, names, 0)
+    assert k == 3 and lab is None and len(trip) == 50
+    assert B.constraints_for("k", styles, names, 0)[0] == 3
+    assert B.constraints_for("auto", styles, names, 0)[0] is None
+    with pytest.raises(ValueError):
+        B.constraints_for("nonsense", styles, names, 0)
+
+
+def _pool(per_cell=12, styles=("s0", "s1", "s2", "s3"), cats=("c0", "c1", "c2", "c3", "c4")):
+    st, ca = [], []
+    for s in styles:
+        for c in cats:
+            st += [s] * per_cell
+            ca += [c] * per_cell
+    return np.array(st), np.array(ca)
+
+
+def test_stratified_subset_balanced_make_up():
+    st, ca = _pool()
+    idx = B.stratified_subset(st, ca, 60, seed=3)
+    assert len(idx) == 60 and len(set(idx)) == 60
+    cells = dict(zip(*np.unique([f"{a}/{b}" for a, b in zip(st[idx], ca[idx])], return_counts=True)))
+    assert set(cells.values()) == {3} and len(cells) == 20
+    assert not np.array_equal(idx, B.stratified_subset(st, ca, 60, seed=4))
+    assert np.array_equal(idx, B.stratified_subset(st, ca, 60, seed=3))
+
+
+def test_stratified_subset_unbalanced_three_to_one():
+    st, ca = _pool()
+    idx = B.stratified_subset(st, ca, 48, seed=0, keep_styles=2, style_weights=(3, 1))
+    got = np.unique(st[idx], return_counts=True)[1]
+    assert sorted(got.tolist()) == [12, 36]
+    assert len(np.unique(ca[idx])) == 5
+    # each style spread evenly over the categories
+    for s in np.unique(st[idx]):
+        per_cat = np.unique(ca[idx][st[idx] == s], return_counts=True)[1]
+        assert per_cat.max() - per_cat.min() <= 1
+
+
+def test_stratified_subset_styles_and_categories_kept():
+    st, ca = _pool()
+    idx = B.stratified_subset(st, ca, 48, seed=1, keep_categories=1)
+    assert len(np.unique(ca[idx])) == 1 and len(np.unique(st[idx])) == 4
+    assert set(np.unique(st[idx], return_counts=True)[1]) == {12}
+    idx = B.stratified_subset(st, ca, 48, seed=1, keep_styles=3)
+    assert len(np.unique(st[idx])) == 3 and set(np.unique(st[idx], return_counts=True)[1]) == {16}
+    with pytest.raises(ValueError):
+        B.stratified_subset(st, ca, 49, seed=1, keep_categories=1)   # only 48 there
+
+
+def test_apportion_respects_capacity():
+    got = B.apportion(10, [1, 1, 1], [1, 10, 10], np.random.default_rng(0))
+    assert got.tolist()[0] == 1 and got.sum() == 10 and abs(got[1] - got[2]) <= 1
+
+
+def test_summarise_mean_and_std():
+    runs = [{"purity": 0.5, "nmi": 0.1}, {"purity": 0.7, "nmi": None}, {"purity": 0.9, "nmi": 0.3}]
+    s = B.summarise(runs)
+    assert s["purity"]["mean"] == pytest.approx(0.7)
+    assert s["purity"]["std"] == pytest.approx(np.std([0.5, 0.7, 0.9]))
+    assert s["purity"]["min"] == 0.5 and s["purity"]["max"] == 0.9
+    assert s["nmi"]["mean"] == pytest.approx(0.2)
+
+
+def test_loop_stability_and_table_with_a_stand_in_analysis():
+    """The loop end to end on a hand-made Collection with a stand-in analysis (no rendering)."""
+    from style_coanalysis.meshes import Mesh
+    st, ca = _pool(per_cell=2, styles=("a", "b"), cats=("x", "y", "z"))
+    n = len(st)
+    rng = np.random.default_rng(0)
+
+    class D:
+        def __init__(self, name):
+            self.name = name
+            self.images = rng.random((2, 16, 16)).astype(np.float32)
+
+    drawings = [D(f"s{i}") for i in range(n)]
+    tetra = np.array([[0, 1, 2], [0, 3, 1], [0, 2, 3], [1, 3, 2]])
+    meshes = [Mesh(d.name, rng.random((4, 3)), tetra) for d in drawings]
+    coll = B.Collection("fake", "fake", meshes, drawings, np.zeros((n, 1)),
+                        {"style": st, "category": ca})
+    truth_by_name = dict(zip(coll.names, st))
+    seen = []
+
+    def oracle(ds, params, labels, triplets, maps):
+        seen.append((params.method, params.n_clusters, labels, triplets))
+        if params.method == "paper":
+            raise NotImplementedError("not yet")
+        return np.array([0 if truth_by_name[d.name] == "a" else 1 for d in ds])
+
+    res = B.evaluate([coll], modes=["k", "auto", "labels-2", "triplets-50"],
+                     methods=["default", "paper"], seeds=2, analyse_fn=oracle,
+                     render_stability=(), log=lambda m: None)
+    e = res["collections"]["fake"]
+    for mode in ("k", "auto", "labels-2", "triplets-50"):
+        s = e["modes"][mode]["default"]["summary"]
+        assert s["purity"]["mean"] == 1.0 and s["ari"]["mean"] == 1.0
+        assert "NotImplementedError" in e["modes"][mode]["paper"]["n/a"]
+    assert e["modes"]["labels-2"]["default"]["summary"]["purity_unlabelled"]["mean"] == 1.0
+    assert e["chance"] == 0.5 and set(e["baselines"]) == {"line statistics", "global shape"}
+    assert e["stability"]["min_auto"] == pytest.approx(1.0)
+    assert e["stability"]["min_k"] == pytest.approx(1.0)
+    assert len(e["stability"]["variants"]) == B.STABILITY_ORDERS
+    # k given where it should be, labels only in label modes, 2 per style
+    assert ("default", 2, None, None) in seen and ("default", None, None, None) in seen
+    assert any(lab is not None and len(lab) == 4 for _, _, lab, _ in seen)
+    table = B.summary_table(res)
+    assert "| fake | 12 | 2 | k | 1.00 ± 0.00 | n/a |" in table
+    assert "order-0" in table
+
+
+def test_collection_names_and_prefixes():
+    names = B.select_collections(["sample-1", "hu2017-60"])
+    assert names == ["sample-120", "hu2017-60-0", "hu2017-60-1", "hu2017-60-2", "hu2017-60-3",
+                     "hu2017-60-4"]
+    assert set(B.QUICK_COLLECTIONS) <= set(B.select_collections(None))
+    with pytest.raises(ValueError):
+        B.select_collections(["nope"])
