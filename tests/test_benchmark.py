@@ -163,5 +163,7 @@ def test_collection_names_and_prefixes():
     assert names == ["sample-120", "hu2017-60-0", "hu2017-60-1", "hu2017-60-2", "hu2017-60-3",
                      "hu2017-60-4"]
     assert set(B.QUICK_COLLECTIONS) <= set(B.select_collections(None))
+    assert B.select_collections(["sample-24"]) == ["sample-24"]          # a name, not a prefix
+    assert "sample-240" in B.select_collections(["sample-2"])
     with pytest.raises(ValueError):
         B.select_collections(["nope"])

@@ -226,13 +226,13 @@ def collection_specs() -> dict:
 
 
 def select_collections(patterns: Iterable[str] | None) -> list[str]:
-    """Collection names matching the given names or prefixes (all when None), in spec order."""
+    """Collection names matching the given names (exactly) or else prefixes (all when None)."""
     names = list(collection_specs())
     if not patterns:
         return names
     out = []
     for p in patterns:
-        hit = [n for n in names if n == p or n.startswith(p)]
+        hit = [p] if p in names else [n for n in names if n.startswith(p)]
         if not hit:
             raise ValueError(f"no collection named or starting with '{p}' (known: {', '.join(names)})")
         out += [n for n in hit if n not in out]
