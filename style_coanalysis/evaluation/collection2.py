@@ -31,6 +31,8 @@ Spec in short:
 """
 from __future__ import annotations
 
+import functools
+
 import numpy as np
 from scipy.spatial import Delaunay, cKDTree
 
@@ -121,34 +123,38 @@ class _Block:
         return self.c + np.stack([x, y, z], -1) @ self.R.T
 
     def build(self, subs=None):
-        Vs, Fs, off = [], [], 0
-        k = 0
+        Ls, Fs, off, k = [], [], 0, 0
         for a in range(3):
             b, c = (a + 1) % 3, (a + 2) % 3
             for s in (1, -1):
                 nb, nc = (1, 1) if subs is None else subs[k]
                 k += 1
-                p = np.linspace(-1, 1, nb + 1)
-                q = np.linspace(-1, 1, nc + 1)
-                P, Q = np.meshgrid(p, q, indexing="ij")
-                L = np.empty(P.shape + (3,))
-                L[..., a] = s
-                L[..., b] = P
-                L[..., c] = Q
-                V = self._map(L).reshape(-1, 3)
-                i, j = np.meshgrid(np.arange(nb), np.arange(nc), indexing="ij")
-                i, j = i.ravel(), j.ravel()
-                v00 = i * (nc + 1) + j
-                v10 = (i + 1) * (nc + 1) + j
-                v11 = (i + 1) * (nc + 1) + j + 1
-                v01 = i * (nc + 1) + j + 1
-                F = np.concatenate([np.stack([v00, v10, v11], 1), np.stack([v00, v11, v01], 1)])
-                if s < 0:
-                    F = F[:, ::-1]
-                Vs.append(V)
-                Fs.append(F + off)
-                off += len(V)
-        return np.concatenate(Vs), np.concatenate(Fs)
+                PQ, Fpos, Fneg = _grid_template(int(nb), int(nc))
+                L = np.empty((len(PQ), 3))
+                L[:, a] = s
+                L[:, b] = PQ[:, 0]
+                L[:, c] = PQ[:, 1]
+                Ls.append(L)
+                Fs.append((Fpos if s > 0 else Fneg) + off)
+                off += len(L)
+        return self._map(np.concatenate(Ls)), np.concatenate(Fs)
+
+
+@functools.lru_cache(maxsize=8192)
+def _grid_template(nb, nc):
+    """Parameter grid (in [-1, 1]^2) and its triangles, wound +, and wound -."""
+    P, Q = np.meshgrid(np.linspace(-1, 1, nb + 1), np.linspace(-1, 1, nc + 1), indexing="ij")
+    i, j = np.meshgrid(np.arange(nb), np.arange(nc), indexing="ij")
+    i, j = i.ravel(), j.ravel()
+    v00, v10 = i * (nc + 1) + j, (i + 1) * (nc + 1) + j
+    v11, v01 = (i + 1) * (nc + 1) + j + 1, i * (nc + 1) + j + 1
+    F = np.concatenate([np.stack([v00, v10, v11], 1), np.stack([v00, v11, v01], 1)])
+    PQ = np.stack([P.ravel(), Q.ravel()], 1)
+    for arr in (PQ, F):
+        arr.setflags(write=False)
+    Fn = np.ascontiguousarray(F[:, ::-1])
+    Fn.setflags(write=False)
+    return PQ, F, Fn
 
 
 def _beam_axes(d):
@@ -418,9 +424,9 @@ def _shell_relief(o, u, v, R, n_ribs, relief, scallop, res):
     o = np.asarray(o, np.float64)
     u, v = _unit(u), _unit(v)
     n = np.cross(u, v)
-    sp = max(3, int(round(4 * res)))
+    sp = max(2, int(round(4 * res)))
     phi = np.linspace(0, np.pi, n_ribs * sp + 1)
-    nr = max(3, int(round(4 * res)))
+    nr = max(2, int(round(4 * res)))
     r_in = 0.2
     rr = np.linspace(r_in, 1, nr + 1)
     rim, rib = _fan_radius(phi, n_ribs, scallop)
@@ -636,7 +642,10 @@ class _Builder:
             R = min(0.42 * L, h * p["drop_f"])
             # flat edge near the apron top, fan hanging down: u' x (-z) must equal out
             uu = np.cross(-_Z, out)  # (uu, -z, out) right-handed: the carving faces out
-            self.shell(mid + out * t / 2 + _Z * (z_top - 0.12 * h), uu, -_Z, R)
+            n = max(1, int(L / (4.2 * R)))
+            for i in range(n):
+                c = np.append(a + (b - a) * (i + 0.5) / n, 0.0)
+                self.shell(c + out * t / 2 + _Z * (z_top - 0.12 * h), uu, -_Z, R)
 
     def back(self, x0, x1, y, z0, z1, rh, depth):
         """Fill a chair/bench back between posts at x0 and x1 (plane y), seat z0 to post top z1."""
@@ -678,7 +687,16 @@ class _Builder:
                 holes = _pierce_pattern(p["pattern"], sw, sh * (1 - p["crown"]), self.rng)
                 self.board(outer, holes, min(depth, 0.022), (xc, y, z0 + rh), _X, _Z, min(sw, sh) * 0.04)
 
-    def top_ornament(self, x0, x1, y, z, h, depth, front_out=(0.0, -1.0)):
+    def top_ornament_side(self, a, c, z, h, depth):
+        """A pierced return board standing on a top between 2D points a and c."""
+        a, c = np.asarray(a, float), np.asarray(c, float)
+        L = float(np.linalg.norm(c - a))
+        holes = [hh + [0, h * 0.1] for hh in _strip_pattern(L * 0.85, h * 0.75, self.rng)]
+        outer = np.array([[-L / 2, 0], [L / 2, 0], [L / 2, h], [-L / 2, h]])
+        u = _unit(np.append(c - a, 0.0))
+        self.board(outer, holes, depth, np.append((a + c) / 2, z), u, _Z, h * 0.09)
+
+    def top_ornament(self, x0, x1, y, z, h, depth, front_out=(0.0, -1.0), wide=False):
         """Ornament standing on a top along its back (or front) edge, from x0 to x1 at plane y."""
         st, p = self.style, self.p
         W = x1 - x0
@@ -691,7 +709,10 @@ class _Builder:
             self.twist((x0 + pw, y, z + h * 0.72), (x1 - pw, y, z + h * 0.72), min(0.4 * h, 0.03))
         elif st == "shellcarved":
             u = _X if front_out[1] < 0 else -_X
-            self.crest((xc, y, z), u, _Z, W * p["crest_w"], h, depth)
+            if wide:
+                self.crest((xc, y, z), u, _Z, W * max(p["crest_w"], 0.8), h * 1.4, depth)
+            else:
+                self.crest((xc, y, z), u, _Z, W * p["crest_w"], h, depth)
         elif st == "spindle":
             self.gallery((x0, y), (x1, y), z, z + h, depth, max(0.015, h * 0.15), bottom=False)
         else:
@@ -716,8 +737,8 @@ def _style_params(style, r):
                  crest_w=r.uniform(0.55, 0.95), crest_h=r.uniform(0.16, 0.3))
     elif style == "spindle":
         sp = r.uniform(0.05, 0.085)
-        p.update(spacing=sp, rs=r.uniform(0.15, 0.21), beads=int(r.integers(1, 3)),
-                 bead_f=r.uniform(1.5, 2.0), round_legs=bool(r.random() < 0.5),
+        p.update(spacing=sp, rs=r.uniform(0.17, 0.24), beads=int(r.integers(1, 3)),
+                 bead_f=r.uniform(1.4, 1.8), round_legs=bool(r.random() < 0.5),
                  two_tier=bool(r.random() < 0.4), gallery_f=r.uniform(1.2, 1.8))
     elif style == "spadefoot":
         p.update(taper=r.uniform(0.55, 0.72), foot_h=r.uniform(0.1, 0.16), foot_w=r.uniform(1.25, 1.45),
@@ -912,6 +933,9 @@ def _bookcase(b, r):
             b.shell((0, -D / 2 + 0.01, 0.005), _X, _Z, min(0.9 * zb, 0.3 * W), backing=0.005)
     fh = min(frieze_h, 0.3 * (Htot - bt - zs[-1]))
     b.apron((-x_in, -D / 2 + 0.01), (x_in, -D / 2 + 0.01), Htot - bt, fh, 0.02, (0, -1), gallery=False)
+    for sx in (-1, 1):  # frieze returns on the outer faces of the sides
+        b.apron((sx * (W / 2 + 0.01), -D / 2), (sx * (W / 2 + 0.01), D / 2), Htot - bt, fh, 0.02, (sx, 0),
+                gallery=False)
     if doors:
         zd0, zd1 = zb + bt, zs[0] - bt / 2
         nd = 1 if W < 0.8 else 2
@@ -932,7 +956,7 @@ def _bookcase(b, r):
                     b.shell(((x0 + x1) / 2, yf, zd0 + (zd1 - zd0) * 0.3), _X, _Z,
                             min(0.35 * (x1 - x0), 0.35 * (zd1 - zd0)), backing=0.005)
     if b.style == "barleytwist":
-        rc = 0.028 + 0.012 * (W - 0.6)
+        rc = 0.03 + 0.015 * (W - 0.6)
         for sy in ((-1, 1) if not has_back else (-1,)):
             yc = sy * (D / 2 + rc * 0.6)
             for sx in (-1, 1):
@@ -942,11 +966,13 @@ def _bookcase(b, r):
                        rc * 1.3, rc * 1.3)
     else:
         y = -D / 2 + 0.025
-        b.top_ornament(-W / 2 + 0.02, W / 2 - 0.02, y, Htot, top_h, 0.02)
-        if b.style == "spindle":
-            for sx in (-1, 1):
-                b.gallery((sx * (W / 2 - 0.02), y), (sx * (W / 2 - 0.02), D / 2 - 0.01), Htot, Htot + top_h,
-                          0.02, max(0.015, top_h * 0.15), bottom=False)
+        b.top_ornament(-W / 2 + 0.02, W / 2 - 0.02, y, Htot, top_h, 0.02, wide=True)
+        for sx in (-1, 1):  # returns along the sides
+            a, c = (sx * (W / 2 - 0.02), y + 0.02), (sx * (W / 2 - 0.02), D / 2 - 0.01)
+            if b.style == "spindle":
+                b.gallery(a, c, Htot, Htot + top_h, 0.02, max(0.015, top_h * 0.15), bottom=False)
+            elif b.style == "spadefoot":
+                b.top_ornament_side(a, c, Htot, top_h * 0.7, 0.02)
 
 
 _CATEGORY_BUILDERS = {"desk": _desk, "bench": _bench, "armchair": _armchair,
