@@ -4,6 +4,7 @@ tuned on, beside trivial baselines and the paper's method, and is it stable?
     python bench/generalisation.py --quick --seeds 3        # a few minutes once drawings are cached
     python bench/generalisation.py                          # every collection, mode and method
     python bench/generalisation.py --collections sample hu2017-60 --modes k auto --methods default
+    python bench/generalisation.py --table bench/results/generalisation.json   # reprint a table
 
 Collections, modes and the scoring loop live in `style_coanalysis/evaluation/benchmark.py`
 (importable: `load_collection`, `evaluate`, `summary_table`). Writes
@@ -29,18 +30,19 @@ RESULTS = ROOT / "bench" / "results"
 
 
 def main(argv=None) -> int:
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0],
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0],
                                  formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--collections", nargs="+", default=None,
                     help="names or prefixes (default: all): " + ", ".join(B.collection_specs()))
-    ap.add_argument("--modes", nargs="+", default=None, choices=B.MODES, help="default: all")
+    ap.add_argument("--modes", nargs="+", default=None, choices=B.MODES, metavar="MODE",
+                    help="default: all: " + ", ".join(B.MODES).replace("%", "%%"))
     ap.add_argument("--methods", nargs="+", default=None, choices=B.METHODS, help="default: both")
     ap.add_argument("--seeds", type=int, default=3, help="seeds 0..N-1 (label/triplet draw and "
                     "random_state)")
     ap.add_argument("--jobs", type=int, default=0, help="render processes (0: all cores)")
     ap.add_argument("--quick", action="store_true",
                     help=f"collections {', '.join(B.QUICK_COLLECTIONS)}; modes "
-                         f"{', '.join(B.QUICK_MODES)}; render-based stability on sample-120 only")
+                         f"{', '.join(B.QUICK_MODES)}; render-based stability on sample-120 only".replace("%", "%%"))
     ap.add_argument("--no-stability", action="store_true", help="skip every stability check")
     ap.add_argument("--stability-everywhere", action="store_true",
                     help="render-based stability (scaled, OBJ, .blend) on every collection, "
@@ -50,7 +52,12 @@ def main(argv=None) -> int:
                          "and seed)")
     ap.add_argument("--out", default=None, help="output stem under bench/results "
                     "(default generalisation, generalisation_quick with --quick)")
+    ap.add_argument("--table", metavar="JSON", default=None,
+                    help="only print the Markdown table of a saved result (e.g. a partial full run)")
     args = ap.parse_args(argv)
+    if args.table:
+        print(B.summary_table(json.loads(Path(args.table).read_text())))
+        return 0
 
     collections = B.select_collections(args.collections or (B.QUICK_COLLECTIONS if args.quick else None))
     modes = args.modes or (list(B.QUICK_MODES) if args.quick else list(B.MODES))
@@ -60,17 +67,24 @@ def main(argv=None) -> int:
     t0 = time.perf_counter()
     print(f"collections: {', '.join(collections)}\nmodes: {', '.join(modes)}; methods: "
           f"{', '.join(methods)}; seeds: {args.seeds}", file=sys.stderr)
-    results = B.evaluate(collections, modes, methods, args.seeds, stability=not args.no_stability,
-                         render_stability=render, stability_seeds=args.stability_seeds,
-                         jobs=args.jobs)
-    results["command"] = " ".join(["python bench/generalisation.py"] + list(argv or sys.argv[1:]))
-    results["wall_seconds"] = time.perf_counter() - t0
+    command = " ".join(["python bench/generalisation.py"] + list(argv or sys.argv[1:]))
     RESULTS.mkdir(parents=True, exist_ok=True)
     stem = args.out or ("generalisation_quick" if args.quick else "generalisation")
-    (RESULTS / f"{stem}.json").write_text(json.dumps(B.to_json(results), indent=1))
-    B.plot(results, RESULTS / f"{stem}.png")
+
+    def save(results, complete=False):
+        results["command"] = command
+        results["complete"] = complete
+        results["wall_seconds"] = time.perf_counter() - t0
+        (RESULTS / f"{stem}.json").write_text(json.dumps(B.to_json(results), indent=1))
+        B.plot(results, RESULTS / f"{stem}.png")
+
+    # saved after every collection, so a long run that is stopped keeps what it measured
+    results = B.evaluate(collections, modes, methods, args.seeds, stability=not args.no_stability,
+                         render_stability=render, stability_seeds=args.stability_seeds,
+                         jobs=args.jobs, on_collection=save)
+    save(results, complete=True)
     print(B.summary_table(results))
-    print(f"\n`{results['command']}`: {results['wall_seconds'] / 60:.1f} min; "
+    print(f"\n`{command}`: {results['wall_seconds'] / 60:.1f} min; "
           f"wrote {RESULTS / stem}.json and .png", file=sys.stderr)
     return 0
 

@@ -217,11 +217,11 @@ def collection_specs() -> dict:
     specs["sample-unbalanced"] = (f"sample, {MAKEUP_SIZE} shapes, 2 styles 3:1, 5 categories",
                                   _subset(_sample_pool, MAKEUP_SIZE, 30, keep_styles=2,
                                           style_weights=(3, 1)))
-    specs["hu2017-all"] = ("hu2017 voxel set, all 537", lambda: list(_voxel_pool()))
     for i in range(5):
         specs[f"hu2017-60-{i}"] = (f"hu2017 voxel set, random stratified 60 (seed {i})",
                                    _subset(_voxel_pool, 60, i))
     specs["collection2"] = ("second generated collection, 120 shapes", _collection2)
+    specs["hu2017-all"] = ("hu2017 voxel set, all 537", lambda: list(_voxel_pool()))  # last: slowest
     return specs
 
 
@@ -406,7 +406,8 @@ def _run_one(coll, mode, method, seed, analyse_fn, drawings=None, maps=None):
 
 def evaluate(collections, modes: Sequence[str] = MODES, methods: Sequence[str] = METHODS,
              seeds=3, analyse_fn=None, stability: bool = True, render_stability=None,
-             stability_seeds: int = 1, jobs: int = 0, log: Log = _stderr) -> dict:
+             stability_seeds: int = 1, jobs: int = 0, log: Log = _stderr,
+             on_collection: Callable[[dict], None] | None = None) -> dict:
     """Score every (collection, mode, method, seed); baselines, chance and stability beside.
 
     `collections`: names (loaded here) or `Collection`s. `seeds`: a count or a list.
@@ -416,6 +417,7 @@ def evaluate(collections, modes: Sequence[str] = MODES, methods: Sequence[str] =
     in `render_stability` (None: RENDER_STABILITY_DEFAULT, True: all), under coordinates
     scaled by 1.0000001 and loaded from OBJ files and from a .blend (new renders); over the
     first `stability_seeds` seeds (each variant costs one analysis per mode and seed).
+    `on_collection(results_so_far)` is called after each collection (to save partial results).
     Returns a JSON-ready dict; `summary_table` turns it into Markdown."""
     seeds = list(range(seeds)) if isinstance(seeds, (int, np.integer)) else [int(s) for s in seeds]
     fn = analyse_fn or default_analyse
@@ -486,6 +488,9 @@ def evaluate(collections, modes: Sequence[str] = MODES, methods: Sequence[str] =
         for key in list(partitions):
             partitions[key] = None
         entry["seconds_total"] = time.perf_counter() - t_all
+        out["seconds"] = time.perf_counter() - t_all
+        if on_collection is not None:
+            on_collection(out)
     out["seconds"] = time.perf_counter() - t_all
     return out
 
