@@ -27,7 +27,9 @@ Spec in short:
 * ``truth = {"style", "category", "face_mask" (True on ornament faces: twisted parts, shell
   carvings and crests, spindles, spade feet, pierced boards), "scale", "yaw_deg"}``.
 
-``make_shape(style, category, rng, name)`` builds one shape; numpy and scipy only, no Blender.
+``make_shape(style, category, rng, name, n_triangles=None)`` builds one shape (``generate``
+passes triangle targets stratified within each style, so no style is denser on average);
+numpy and scipy only, no Blender. Units before scaling are metres, front is -y.
 """
 from __future__ import annotations
 
@@ -585,7 +587,7 @@ class _Builder:
                 self.beam((x, y, a), (x, y, b), th / 2, th / 2)
             for (a0, b0), (a1, b1) in zip(cuts[:-1], cuts[1:]):
                 if a1 - b0 > 2.5 * th:
-                    self.twist((x, y, b0), (x, y, a1), th * 0.55)
+                    self.twist((x, y, b0), (x, y, a1), th * 0.6)
                 elif a1 > b0:
                     self.beam((x, y, b0), (x, y, a1), th / 2, th / 2)
         elif st == "spadefoot":
@@ -639,7 +641,7 @@ class _Builder:
             return
         self.beam((*a, z_top - h / 2), (*b, z_top - h / 2), t / 2, h / 2)
         if st == "shellcarved" and shell:
-            R = min(0.42 * L, h * p["drop_f"])
+            R = min(0.42 * L, max(h * p["drop_f"], min(0.2 * L, 0.16)))
             # flat edge near the apron top, fan hanging down: u' x (-z) must equal out
             uu = np.cross(-_Z, out)  # (uu, -z, out) right-handed: the carving faces out
             n = max(1, int(L / (4.2 * R)))
@@ -999,7 +1001,23 @@ def _pad_counts(sizes, avail):
             lo = mid
         else:
             hi = mid
-    return grids(lo)
+    na, nb = grids(lo)
+    # many equal faces cross a rounding step together: spend what is left face by face
+    rem = int(avail - 2 * np.sum(na * nb))
+    order = np.argsort(-(la * lb))
+    for _ in range(4):
+        for i in order:
+            if rem < 2 * min(na[i], nb[i]):
+                continue
+            grow_a = la[i] / na[i] >= lb[i] / nb[i]
+            cost_a, cost_b = 2 * nb[i], 2 * na[i]
+            if (grow_a and cost_a <= rem) or cost_b > rem:
+                na[i] += 1
+                rem -= cost_a
+            else:
+                nb[i] += 1
+                rem -= cost_b
+    return na, nb
 
 
 def _assemble(b, target, rng):
