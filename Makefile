@@ -10,7 +10,7 @@ REQ_SHA = $(shell cat requirements.txt requirements-dev.txt | sha256sum | cut -c
 DEMO   ?= demo
 JOBS   ?= 0
 
-.PHONY: setup system-deps test demo dist bench clean
+.PHONY: setup system-deps test test-compat demo dist bench clean
 
 setup: system-deps
 	@if [ ! -x $(PY) ]; then echo "creating $(VENV) with $(PYTHON)"; $(PYTHON) -m venv $(VENV); fi
@@ -29,6 +29,28 @@ system-deps:
 
 test: setup
 	$(PY) -m pytest -q
+
+# The built linux zip installed into older Blenders (bpy 4.2 LTS and 4.5 LTS, each in its own venv
+# under build/compat, made once): install, register, and one small headless analysis per renderer
+# through the installed package (tests/compat_check.py). Separate from `make test`: the two venvs
+# are about 2 GB to download the first time.
+COMPAT_BPY       ?= 4.2.23 4.5.15
+COMPAT_RENDERERS ?= freestyle lineart
+COMPAT_DIR       := build/compat
+
+test-compat: setup
+	$(PY) tools/build_dist.py --platforms linux-x64 --out $(COMPAT_DIR)/dist
+	@set -e; for v in $(COMPAT_BPY); do \
+	  venv=$(COMPAT_DIR)/bpy-$$v; \
+	  if [ ! -x $$venv/bin/python ] || ! $$venv/bin/python -c "import bpy" 2>/dev/null; then \
+	    echo "creating $$venv (bpy $$v)"; rm -rf $$venv; $(PYTHON) -m venv $$venv; \
+	    $$venv/bin/python -m pip install --quiet --disable-pip-version-check bpy==$$v; \
+	  fi; \
+	  rm -rf $(COMPAT_DIR)/work-$$v; \
+	  echo "== bpy $$v"; \
+	  $$venv/bin/python tests/compat_check.py $(COMPAT_DIR)/dist/style_coanalysis-*-linux_x64.zip \
+	    $(COMPAT_DIR)/work-$$v $(COMPAT_RENDERERS); \
+	done
 
 # The main job on the bundled sample collection: 120 generated shapes, 20% of them labelled.
 demo: setup

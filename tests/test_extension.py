@@ -74,6 +74,18 @@ INSTALL = textwrap.dedent("""
     with contextlib.redirect_stderr(err):   # the handler Blender's `-c style_coanalysis` calls
         state["cli_rc"] = ext.run_cli(["analyze", "/nonexistent/in.blend", "--out", sys.argv[2]])
     state["cli_err"] = err.getvalue()
+    # a small real run through the installed package: `sample` then `analyze` a folder, both of
+    # which start from an empty scene; that must not disable the extension (and drop its wheels)
+    work = os.path.join(sys.argv[2], "run")
+    with contextlib.redirect_stderr(io.StringIO()) as run_err:
+        state["sample_rc"] = ext.run_cli(["sample", "--out", work, "--size", "3", "--seed", "1"])
+        state["analyze_rc"] = ext.run_cli([
+            "analyze", os.path.join(work, "meshes"), "--out", os.path.join(work, "out"),
+            "--renderer", "lineart", "--jobs", "1", "--rounds", "1", "--clusters", "2",
+            "--cache", os.path.join(work, "cache")])
+    state["run_err"] = run_err.getvalue()[-2000:]
+    state["enabled_after_run"] = module in {m for m in bpy.context.preferences.addons.keys()}
+    state["out"] = sorted(os.listdir(os.path.join(work, "out"))) if state["analyze_rc"] == 0 else []
     local = os.path.join(bpy.utils.user_resource("EXTENSIONS"), ".local")
     state["wheels"] = sorted(p for p in ("sklearn", "scipy", "skimage") if any(
         os.path.isfile(os.path.join(r, p, "__init__.py")) for r, _, _ in os.walk(local)))
@@ -98,6 +110,9 @@ def test_installs_registers_and_unregisters_in_blender(linux_zip, tmp_path):
     # the command line registered with Blender runs from the installed package (relative imports)
     assert state["cli_registered"]
     assert state["cli_rc"] == 2 and "/nonexistent/in.blend" in state["cli_err"]
+    assert state["sample_rc"] == 0 and state["analyze_rc"] == 0, state["run_err"]
+    assert state["enabled_after_run"]
+    assert {"result.blend", "report.json", "report.html", "images"} <= set(state["out"])
     assert not state["panel_after"] and not state["operator_after"] and not state["enabled_after"]
     assert "Traceback" not in res.stderr, res.stderr[-2000:]
     # installed under the temporary user folder, not the developer's

@@ -29,7 +29,7 @@ def load_input(path: str, collection: str | None):
         if collection:
             raise InputError("--collection applies to a .blend INPUT, not to a folder")
         import bpy
-        bpy.ops.wm.read_factory_settings(use_empty=True)
+        scene.empty_session()
         meshes = scene.import_mesh_files(p)
         # the shapes become objects of an empty scene: result.blend holds them with their results
         names = scene.objects_from_meshes(meshes, "Shapes")

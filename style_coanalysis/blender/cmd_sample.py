@@ -45,7 +45,7 @@ def run(args) -> int:
             if (i + 1) % 20 == 0 or i + 1 == len(shapes):
                 print(f"wrote {i + 1}/{len(shapes)} OBJ + truth files", file=sys.stderr)
 
-    bpy.ops.wm.read_factory_settings(use_empty=True)
+    scene.empty_session()
     names = scene.objects_from_meshes(shapes, "Sample")
     cols = max(1, math.ceil(math.sqrt(len(names))))
     for i, n in enumerate(names):

@@ -207,6 +207,15 @@ def objects_from_meshes(meshes, collection_name: str) -> list[str]:
     return names
 
 
+def empty_session() -> None:
+    """An empty factory scene, keeping the preferences.
+
+    Not `read_factory_settings`: inside Blender it also resets the preferences, which disables
+    every extension, this one included, and removes their bundled wheels from disk mid-run
+    (seen with bpy 4.5 and 5.0 and an installed zip)."""
+    bpy.ops.wm.read_homefile(use_empty=True, use_factory_startup=True, load_ui=False)
+
+
 def save_blend(path) -> None:
     """Save the session to `path` as a copy (the session keeps its own file path)."""
     path = os.path.abspath(os.fspath(path))
