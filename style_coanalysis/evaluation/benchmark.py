@@ -654,10 +654,11 @@ def summary_table(results: dict) -> str:
     seeds = results["settings"]["seeds"]
     lines = [f"Style purity, mean ± std over {len(seeds)} seeds; baselines with k given "
              "(line statistics, global shape); chance = majority share. "
-             "cat. = category purity of the default's result; k = clusters found.", "",
+             "cat. = category purity of the default's / paper's result; k = clusters the "
+             "default found per seed.", "",
              "| collection | N | styles | mode | default | paper | line stats | global shape | chance "
              "| default NMI | cat. | k |",
-             "|---|---:|---:|---|---|---|---|---|---:|---|---:|---|"]
+             "|---|---:|---:|---|---|---|---|---|---:|---|---|---|"]
     for name, e in results["collections"].items():
         b = e["baselines"]
         for mode, row in e["modes"].items():
@@ -668,7 +669,8 @@ def summary_table(results: dict) -> str:
                 f"| {name} | {e['n_shapes']} | {e['n_styles']} | {mode} | {_pm(ds)} | {_pm(ps)} "
                 f"| {_pm(b['line statistics']['summary'])} | {_pm(b['global shape']['summary'])} "
                 f"| {e['chance']:.2f} | {_pm(ds, 'nmi')} "
-                f"| {ds['category_purity']['mean']:.2f} | {ks} |" if ds else
+                f"| {ds['category_purity']['mean']:.2f} / "
+                f"{_fmt(ps['category_purity']['mean'] if ps else None, 2)} | {ks} |" if ds else
                 f"| {name} | {e['n_shapes']} | {e['n_styles']} | {mode} | {d.get('n/a', 'n/a')[:40]} "
                 f"| {_pm(ps)} | {_pm(b['line statistics']['summary'])} "
                 f"| {_pm(b['global shape']['summary'])} | {e['chance']:.2f} | n/a | n/a | n/a |")
