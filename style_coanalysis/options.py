@@ -259,8 +259,11 @@ def check_output(out, inputs=(), cache_dir=None) -> Path:
     `analyze` replaces --out as a whole (see `publish`), so --out must not hold an input (INPUT,
     its folder, the CSVs), the cache, or files that are not a previous result; it must not lie
     inside a folder INPUT either (the input is never written), and its parent must be writable.
-    Returns the resolved path.
+    Inputs that do not exist are reported first. Returns the resolved path.
     """
+    for p in inputs:
+        if p is not None and not os.path.exists(p):
+            raise InputError(f"'{p}' does not exist")
     out = Path(os.path.abspath(os.fspath(out))).resolve()
     if out.exists() and not out.is_dir():
         raise InputError(f"--out '{out}' is an existing file, not a folder")
