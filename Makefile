@@ -40,7 +40,7 @@ COMPAT_DIR       := build/compat
 
 test-compat: setup
 	$(PY) tools/build_dist.py --platforms linux-x64 --out $(COMPAT_DIR)/dist
-	@set -e; for v in $(COMPAT_BPY); do \
+	@failed=""; for v in $(COMPAT_BPY); do \
 	  venv=$(COMPAT_DIR)/bpy-$$v; \
 	  if [ ! -x $$venv/bin/python ] || ! $$venv/bin/python -c "import bpy" 2>/dev/null; then \
 	    echo "creating $$venv (bpy $$v)"; rm -rf $$venv; $(PYTHON) -m venv $$venv; \
@@ -49,8 +49,9 @@ test-compat: setup
 	  rm -rf $(COMPAT_DIR)/work-$$v; \
 	  echo "== bpy $$v"; \
 	  $$venv/bin/python tests/compat_check.py $(COMPAT_DIR)/dist/style_coanalysis-*-linux_x64.zip \
-	    $(COMPAT_DIR)/work-$$v $(COMPAT_RENDERERS); \
-	done
+	    $(COMPAT_DIR)/work-$$v $(COMPAT_RENDERERS) || failed="$$failed $$v"; \
+	done; \
+	if [ -n "$$failed" ]; then echo "test-compat failed for bpy$$failed"; exit 1; fi
 
 # The main job on the bundled sample collection: 120 generated shapes, 20% of them labelled.
 demo: setup

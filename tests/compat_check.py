@@ -18,7 +18,7 @@ import contextlib, io, json, os, sys
 import bpy
 zip_path, work = sys.argv[1], sys.argv[2]
 renderers = sys.argv[3:]
-state = {"blender": bpy.app.version_string}
+state = {"blender": bpy.app.version_string, "version": list(bpy.app.version)}
 bpy.ops.wm.read_factory_settings(use_empty=True)
 res = bpy.ops.extensions.package_install_files(filepath=zip_path, repo="user_default",
                                                enable_on_install=True)
@@ -74,6 +74,12 @@ def main(argv):
         "disabled": state["disabled"],
     }
     for r, a in state["analyses"].items():
+        if r == "lineart" and tuple(state["version"]) < (4, 3, 0):
+            # no Grease Pencil v3 before 4.3: refused up front, by name, not a crash
+            checks["lineart refused before 4.3"] = (
+                a["rc"] == 2 and "Line Art renderer needs Blender 4.3" in a["stderr_tail"]
+                and "] render" not in a["stderr_tail"])
+            continue
         checks[f"analyse ({r})"] = (a["rc"] == 0 and a["shapes"] == 8 and
                                     {"result.blend", "report.json", "report.html"} <= set(a["files"]))
     state["checks"] = checks

@@ -123,8 +123,10 @@ def _run_steps(meshes: list[Mesh], options: JobOptions):
             good.append(m)
         except InputError as exc:  # no faces, degenerate: skipped, listed in the report
             skipped[m.name] = str(exc).replace(f"'{m.name}' ", "")
-    # every check that needs the shapes, before the first render
+    # every check that needs the shapes or this Blender, before the first render
     check_shapes(options, [m.name for m in good], skipped)
+    from .render import check_renderer
+    check_renderer(options.renderer)
 
     # 1. drawings (per shape, cached): in worker processes or, one view per step, right here
     settings = options.drawing_settings()

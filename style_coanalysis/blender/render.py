@@ -150,6 +150,8 @@ class TempScene:
 # ---------------------------------------------------------------- Freestyle
 def _holdout_material(ts: TempScene):
     mat = ts._new("materials", PREFIX + "holdout")
+    if mat.node_tree is None:       # Blender before 5.0: new materials have no nodes yet
+        mat.use_nodes = True
     nt = mat.node_tree
     nt.nodes.clear()
     hold = nt.nodes.new("ShaderNodeHoldout")
@@ -252,8 +254,21 @@ def _run(gen):
 
 
 # ---------------------------------------------------------------- Line Art
+LINEART_MIN_BLENDER = (4, 3, 0)     # Grease Pencil v3 and its Line Art modifier
+
+
+def check_renderer(renderer: str) -> None:
+    """Refuse a renderer this Blender cannot run, before any work (InputError)."""
+    if renderer == "lineart" and bpy.app.version < LINEART_MIN_BLENDER:
+        need = ".".join(map(str, LINEART_MIN_BLENDER[:2]))
+        raise InputError(f"the Line Art renderer needs Blender {need} or later (this is "
+                         f"{bpy.app.version_string}): use the Freestyle renderer")
+
+
 def _setup_lineart(ts: TempScene, settings: DrawingSettings):
-    gp = ts._new("grease_pencils", PREFIX + "lines")
+    # Blender 4.3-4.5 keep Grease Pencil v3 data apart (v2 is `grease_pencils` there); 5.0 renamed it
+    gp = ts._new("grease_pencils_v3" if hasattr(bpy.data, "grease_pencils_v3") else "grease_pencils",
+                 PREFIX + "lines")
     mat = ts._new("materials", PREFIX + "gp_ink")
     bpy.data.materials.create_gpencil_data(mat)
     gp.materials.append(mat)
