@@ -304,8 +304,12 @@ def test_sigint_with_two_jobs_ends_the_workers_at_once(shapes, tmp_path):
                              "--renderer", "freestyle", "--jobs", "2", "--cache",
                              str(tmp_path / "cache")], cwd=ROOT, stderr=subprocess.PIPE, text=True)
     for line in proc.stderr:
-        if re.search(r"render 0/6 \(.*view", line):      # the workers are drawing
+        if "] render 0/6" in line:
             break
+    deadline = time.monotonic() + 30
+    while len(_children(proc.pid)) < 2 and time.monotonic() < deadline:
+        time.sleep(0.2)
+    time.sleep(3.0)                  # the workers are drawing (about 2 s per shape here)
     workers = _children(proc.pid)
     assert len(workers) >= 2
     t0 = time.monotonic()
