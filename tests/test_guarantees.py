@@ -97,8 +97,7 @@ def test_interrupted_runs_leave_the_previous_result_whole(shapes, tmp_path):
     first = digest(out)
     # Ctrl-C at each stage of a second run (a different seed: a different result): --out holds the
     # whole first result or the whole second one, and nothing is left beside it
-    for stage in ("render", "hog", "analysis", "localise", "write", "save result.blend",
-                  "report"):
+    for stage in ("render", "analysis", "write", "save result.blend", "report"):
         proc = subprocess.Popen([sys.executable, "-m", "style_coanalysis",
                                  *map(str, [*args, "--seed", 7, "--jobs", 2])], cwd=ROOT,
                                 stderr=subprocess.PIPE, text=True)
