@@ -29,6 +29,22 @@ from style_coanalysis.evaluation import benchmark as B  # noqa: E402
 RESULTS = ROOT / "bench" / "results"
 
 
+def code_state() -> dict:
+    """The commit the analysis code was imported from, and whether its files differed from it
+    (others edit the tree while a long run goes on: a result belongs to the code it ran)."""
+    import subprocess
+
+    def git(*a):
+        try:
+            return subprocess.run(["git", *a], cwd=ROOT, capture_output=True, text=True,
+                                  timeout=30).stdout.strip()
+        except (OSError, subprocess.SubprocessError):
+            return ""
+    dirty = git("status", "--porcelain", "--", "style_coanalysis").splitlines()
+    return {"commit": git("rev-parse", "--short", "HEAD"), "uncommitted": dirty,
+            "started": time.strftime("%Y-%m-%d %H:%M:%S UTC", time.gmtime())}
+
+
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0],
                                  formatter_class=argparse.RawDescriptionHelpFormatter)
@@ -71,8 +87,11 @@ def main(argv=None) -> int:
     RESULTS.mkdir(parents=True, exist_ok=True)
     stem = args.out or ("generalisation_quick" if args.quick else "generalisation")
 
+    code = code_state()
+
     def save(results, complete=False):
         results["command"] = command
+        results["code"] = code
         results["complete"] = complete
         results["wall_seconds"] = time.perf_counter() - t0
         (RESULTS / f"{stem}.json").write_text(json.dumps(B.to_json(results), indent=1))
@@ -84,6 +103,8 @@ def main(argv=None) -> int:
                          jobs=args.jobs, on_collection=save)
     save(results, complete=True)
     print(B.summary_table(results))
+    print(f"\ncode {code['commit']} ({len(code['uncommitted'])} uncommitted files under "
+          f"style_coanalysis/ at the start)", file=sys.stderr)
     print(f"\n`{command}`: {results['wall_seconds'] / 60:.1f} min; "
           f"wrote {RESULTS / stem}.json and .png", file=sys.stderr)
     return 0
