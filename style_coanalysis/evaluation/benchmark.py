@@ -736,8 +736,9 @@ def plot(results: dict, path) -> None:
         ax.set_ylabel("style purity", fontsize=8)
     for ax in axes.ravel()[len(colls):]:
         ax.axis("off")
-    axes.ravel()[0].legend(fontsize=6, loc="lower left")
-    fig.tight_layout()
+    handles, labels = axes.ravel()[0].get_legend_handles_labels()
+    fig.legend(handles, labels, loc="lower center", ncol=len(labels), fontsize=8)
+    fig.tight_layout(rect=(0, 0.04, 1, 1))
     fig.savefig(path, dpi=90)
     plt.close(fig)
 
