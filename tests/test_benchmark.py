@@ -49,6 +49,7 @@ def test_mode_constraints_same_for_every_method_and_seeded():
     assert B.constraints_for("labels-2", styles, names, 1)[1] != lab
     k, lab, trip, _ = B.constraints_for("triplets-50", styles, names, 0)
     assert k == 3 and lab is None and len(trip) == 50
+    assert set(_) == {names.index(x) for abc in trip for x in abc}
     assert B.constraints_for("k", styles, names, 0)[0] == 3
     assert B.constraints_for("auto", styles, names, 0)[0] is None
     with pytest.raises(ValueError):
