@@ -168,3 +168,14 @@ def test_collection_names_and_prefixes():
     assert "sample-240" in B.select_collections(["sample-2"])
     with pytest.raises(ValueError):
         B.select_collections(["nope"])
+
+
+def test_missing_collection_is_skipped_with_a_note(monkeypatch):
+    def unavailable():
+        raise B.CollectionUnavailable("not written yet")
+    monkeypatch.setattr(B, "collection_specs", lambda: {"gone": ("a collection", unavailable)})
+    notes = []
+    res = B.evaluate(["gone"], modes=["k"], methods=["default"], seeds=1, log=notes.append)
+    assert res["collections"] == {} and "not written yet" in res["skipped_collections"]["gone"]
+    assert any("skipped gone" in n for n in notes)
+    assert "skipped: not written yet" in B.summary_table(res)
