@@ -1,4 +1,4 @@
-"""Baseline fusions to compare against PSLF on the same per-view features.
+"""Feature fusions to compare against the default style graph and PSLF on the same views.
 
 Each takes the list of views (n_samples, n_features_p) and returns one (n_samples, d) matrix. All
 start from :func:`style_coanalysis.scaling.scale_views`, the scaling PSLF uses, so a comparison
@@ -93,25 +93,3 @@ class CCAFusion(BaseEstimator):
     def fit(self, views, y=None):
         self.fit_transform(views)
         return self
-
-
-class MaxPoolFusion(BaseEstimator):
-    """Element-wise maximum over the scaled views (views must share their dimension)."""
-
-    def __init__(self, scaling="auto"):
-        self.scaling = scaling
-
-    def fit_transform(self, views, y=None):
-        Xs = scale_views(views, self.scaling)
-        dims = {X.shape[1] for X in Xs}
-        if len(dims) != 1:
-            raise ValueError(f"MaxPoolFusion needs views of equal dimension, got "
-                             f"{[X.shape[1] for X in Xs]}")
-        return np.max(np.stack(Xs), axis=0)
-
-    def fit(self, views, y=None):
-        self.fit_transform(views)
-        return self
-
-
-__all__ = ["ConcatFusion", "PCAFusion", "CCAFusion", "MaxPoolFusion", "SCALINGS"]

@@ -7,10 +7,10 @@
   "Parameters") around each seed in every view where the seed is visible
   (`patches.extract_patches`; it also drops windows with under 1 % ink, blank paper).
 * 4.1 Pre-selection: per view, k-means over the HOG descriptors of that view's patches,
-  `params.n_representatives` (paper: 50) centres (`encoding.build_filter_bank`).
+  `params.n_representatives` (paper: 50) centres (`build_filter_bank`).
 * 4.2 Per-view encoding: each view's representatives convolve that view's HOG map (cosine),
   max-pooled over the whole image and its 4 quadrants: 5 values per filter, 5K per view
-  (`encoding.encode`, `encoding.view_features`).
+  (`encode`, `view_features`).
 * 4.3 Fusion, eq. 1: PSLF over the P views, K = `params.n_components`, eta, lambda, learned view
   weights pi (`pslf.PSLF`).
 * 4.4 Labels, eq. 2: the same PSLF with the label term (beta, gamma); unlabelled shapes by
@@ -67,13 +67,13 @@ import time
 from dataclasses import dataclass
 
 import numpy as np
+from numpy.lib.stride_tricks import sliding_window_view
 from scipy.optimize import nnls
 
 from .clustering import SelfTuningSpectralClustering, TripletClustering
 from .drawings import ShapeDrawings
-from .encoding import EPS, FilterBank, build_filter_bank, cross_view_responses, encode, \
-    unit_rows, view_features
-from .features import hog_images, patch_descriptors
+from .encoding import EPS, FilterBank, representatives, unit_rows
+from .features import PIXELS_PER_CELL, hog_images, patch_descriptors
 from .meshes import InputError
 from .params import AnalysisParams
 from .patches import Patches, extract_patches
@@ -81,6 +81,104 @@ from .pipeline import AnalysisResult, StyleFilter, _check_inputs, _relabel_by_ap
     _soft_confidence, n_changed
 from .progress import Progress
 from .pslf import PSLF
+
+N_POOL = 5          # whole image + 4 quadrants
+
+
+def correlate_pooled(maps: np.ndarray, filters: np.ndarray, image_size: tuple[int, int],
+                     chunk_values: int = 12_000_000) -> np.ndarray:
+    """Cosine responses of every filter over every map, max-pooled: (M, K, 5).
+
+    maps: (M, by, bx, C) HOG block maps; filters: (K, nb, nb, C). Pool order: whole image, then
+    quadrants top-left, top-right, bottom-left, bottom-right (by window centre pixel).
+    """
+    maps = np.asarray(maps, np.float32)
+    filters = np.asarray(filters, np.float32)
+    m, by, bx, c = maps.shape
+    k, nb = len(filters), filters.shape[1]
+    oy, ox = by - nb + 1, bx - nb + 1
+    out = np.zeros((m, k, N_POOL), np.float32)
+    if m == 0 or k == 0 or oy <= 0 or ox <= 0:
+        return out
+    # sliding_window_view puts the window axes last: (M, oy, ox, C, nb, nb); match the filters
+    fmat = unit_rows(filters.transpose(0, 3, 1, 2)).T                                          # (C*nb*nb, K)
+    h, w = image_size
+    centre = (np.arange(oy) + (nb + 1) / 2) * PIXELS_PER_CELL
+    top = centre < h / 2
+    centre_x = (np.arange(ox) + (nb + 1) / 2) * PIXELS_PER_CELL
+    left = centre_x < w / 2
+    quads = [(top, left), (top, ~left), (~top, left), (~top, ~left)]
+    step = max(1, chunk_values // (oy * ox * c * nb * nb))
+    for s in range(0, m, step):
+        win = sliding_window_view(maps[s:s + step], (nb, nb), axis=(1, 2))
+        cols = win.reshape(-1, c * nb * nb)                              # copy: (b*oy*ox, D)
+        norm = np.sqrt(np.einsum("ij,ij->i", cols, cols))
+        resp = (cols @ fmat) / np.maximum(norm, EPS)[:, None]
+        resp[norm < EPS] = 0.0
+        resp = resp.reshape(-1, oy, ox, k)
+        out[s:s + step, :, 0] = resp.max(axis=(1, 2))
+        for q, (rows, colsel) in enumerate(quads, start=1):
+            if rows.any() and colsel.any():
+                out[s:s + step, :, q] = resp[:, rows][:, :, colsel].max(axis=(1, 2))
+    return np.clip(out, 0.0, 1.0)
+
+
+
+
+def encode(view_maps: np.ndarray, bank: FilterBank, image_size: tuple[int, int]) -> np.ndarray:
+    """Pooled responses of each filter over its own view in every shape: (N, F, 5).
+
+    view_maps: (N, V, by, bx, C). Each view's filters run only on that view of each shape, so
+    the per-view feature of view v is `pooled[:, bank.view == v].reshape(N, -1)` (5K values).
+    """
+    n = view_maps.shape[0]
+    out = np.zeros((n, len(bank), N_POOL), np.float32)
+    for v in np.unique(bank.view):
+        idx = np.flatnonzero(bank.view == v)
+        out[:, idx] = correlate_pooled(view_maps[:, v], bank.hog[idx], image_size)
+    return out
+
+
+
+
+def view_features(pooled: np.ndarray, bank_view: np.ndarray, keep: np.ndarray | None,
+                  n_views: int) -> list[np.ndarray]:
+    """Per-view feature matrices (N, 5 K_v) from pooled responses, using only the kept filters.
+
+    Re-encoding with a subset of filters is exactly this column selection, so it costs nothing.
+    """
+    n = pooled.shape[0]
+    keep = np.ones(len(bank_view), bool) if keep is None else np.asarray(keep, bool)
+    return [pooled[:, keep & (bank_view == v)].reshape(n, -1) for v in range(n_views)]
+
+
+
+
+def build_filter_bank(view_maps: np.ndarray, shape: np.ndarray, view: np.ndarray,
+                      seed: np.ndarray, centre: np.ndarray, size: int, k: int,
+                      random_state: int = 0) -> FilterBank:
+    """Representative filters of every view from the collection's patches.
+
+    view_maps: (N, V, by, bx, C); shape, view, seed: (n,) per patch; centre: (n, 2) (x, y).
+    Descriptors are cut from the maps (features.patch_descriptors), so each filter is exactly
+    a window of its source view's map. Windows with no gradient at all are ignored.
+    """
+    n_shapes, n_views = view_maps.shape[:2]
+    shape = np.asarray(shape, np.int64)
+    view = np.asarray(view, np.int64)
+    flat = view_maps.reshape(n_shapes * n_views, *view_maps.shape[2:])
+    desc, _ = patch_descriptors(flat, shape * n_views + view, centre, size)
+    nonblank = desc.reshape(len(desc), -1).max(axis=1) > EPS if len(desc) else np.zeros(0, bool)
+    picks = []
+    for v in range(n_views):
+        idx = np.flatnonzero((view == v) & nonblank)
+        if len(idx):
+            picks.append(idx[representatives(desc[idx], k, random_state + v)])
+    pick = np.concatenate(picks) if picks else np.zeros(0, np.int64)
+    hogs = unit_rows(desc[pick]).reshape(desc[pick].shape) if len(pick) else desc[:0]
+    return FilterBank(hogs.astype(np.float32), view[pick], shape[pick],
+                      np.asarray(seed, np.int64)[pick], np.asarray(centre, np.float32)[pick])
+
 
 N_SEEDS = 30        # seeds per shape (paper 4.1)
 PATCH_SIZE = 48     # pixels (paper 5, "Parameters")
@@ -306,12 +404,8 @@ def analyse_paper(drawings: list[ShapeDrawings], params: AnalysisParams,
         used.add(new_keep.tobytes())
         keep = new_keep
 
-    t = time.perf_counter()
-    prog.step("responses", 0, 1)
     final = np.flatnonzero(keep)
     kept = bank.subset(final)
-    responses = cross_view_responses(maps, kept, image_size)
-    timings["responses"] = time.perf_counter() - t
 
     word_cluster, word_score = _word_clusters(sel, keep)
     style_filters = [StyleFilter(cluster=int(word_cluster[k]), view=int(kept.view[k]),
@@ -326,6 +420,8 @@ def analyse_paper(drawings: list[ShapeDrawings], params: AnalysisParams,
     return AnalysisResult(names=names, clusters=np.asarray(clusters, np.int64),
                           n_clusters=n_clusters, fused=fused, confidence=np.asarray(conf),
                           classes=classes, predicted=predicted, label_given=label_given,
-                          style_filters=style_filters, responses=responses, view_weights=weights,
+                          style_filters=style_filters, view_weights=weights,
+                          view_names=[f"view {v}" for v in range(len(weights))]
+                          if weights is not None else [],
                           rounds=rounds, timings=timings, words=kept.hog,
                           word_cluster=word_cluster, word_score=word_score)

@@ -35,9 +35,8 @@ class AnalysisParams:
     patch_size: int = 24                 # pixels, style patches/filters (paper: 48; see pipeline)
     n_representatives: int = 50          # k-means centres of the layout (structure) dictionary
     n_words: int = 200                   # k-means centres of the style dictionary (all views)
-    structure_patch_size: int = 48       # pixels, layout patches used to find structural neighbours
-    structure_neighbours: float = 1 / 6  # share of the collection whose mean style words cancel
-    n_style_dims: int = 10               # principal directions of the style residual kept
+    structure_patch_size: int = 48       # pixels, layout patches used to find structural look-alikes
+    n_style_dims: int = 10               # principal directions kept per view; spectral coordinates
     min_filters: int = 5                 # reselection keeps at least this many filters
     n_clusters: int | None = None        # None: chosen automatically (self-tuning spectral)
     n_components: int = 20               # K latent factors per view in PSLF

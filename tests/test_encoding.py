@@ -1,8 +1,8 @@
 """Convolutional encoding: a filter finds its own patch, 5 pooled values per filter."""
 import numpy as np
 
-from style_coanalysis.encoding import (FilterBank, build_filter_bank, correlate_pooled, encode,
-                                       representatives, unit_rows, view_features)
+from style_coanalysis.encoding import FilterBank, representatives, unit_rows
+from style_coanalysis.paper_method import build_filter_bank, correlate_pooled, encode, view_features
 from style_coanalysis.features import hog_images, patch_descriptors
 
 

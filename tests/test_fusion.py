@@ -5,7 +5,7 @@ from sklearn.cluster import KMeans
 from sklearn.metrics import adjusted_rand_score
 from sklearn.preprocessing import normalize
 
-from style_coanalysis.fusion import CCAFusion, ConcatFusion, MaxPoolFusion, PCAFusion
+from style_coanalysis.fusion import CCAFusion, ConcatFusion, PCAFusion
 from style_coanalysis.scaling import scale_view
 
 
@@ -49,11 +49,3 @@ def test_cca_fusion_picks_a_pair_of_informative_views():
     assert adjusted_rand_score(z, KMeans(3, n_init=10, random_state=0).fit_predict(F)) > 0.9
     with pytest.raises(ValueError, match="two views"):
         CCAFusion().fit_transform(views[:1])
-
-
-def test_maxpool_fusion():
-    views, z = views_with_clusters(equal=True)
-    F = MaxPoolFusion().fit_transform(views)
-    assert F.shape == (90, 12) and F.min() >= 0
-    with pytest.raises(ValueError, match="equal dimension"):
-        MaxPoolFusion().fit_transform(views_with_clusters()[0])

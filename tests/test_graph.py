@@ -1,0 +1,45 @@
+"""The style graph: fused view graphs, spectral cut, automatic number of clusters."""
+import numpy as np
+
+from style_coanalysis import graph
+
+
+def _blobs(sizes, dim=5, spread=0.15, seed=0):
+    rng = np.random.default_rng(seed)
+    centres = rng.normal(size=(len(sizes), dim)) * 2
+    x = np.concatenate([c + spread * rng.normal(size=(s, dim)) for c, s in zip(centres, sizes)])
+    return x, np.repeat(np.arange(len(sizes)), sizes)
+
+
+def test_partition_recovers_separated_groups_whatever_their_order():
+    from sklearn.metrics import adjusted_rand_score
+    x, truth = _blobs([15, 20, 25])
+    lab = graph.partition(graph.affinity(x), 3)
+    assert adjusted_rand_score(truth, lab) == 1.0
+    perm = np.random.default_rng(1).permutation(len(x))
+    again = graph.partition(graph.affinity(x[perm]), 3)
+    back = np.empty_like(again)
+    back[perm] = again
+    assert adjusted_rand_score(lab, back) == 1.0
+
+
+def test_choose_n_clusters_finds_the_spectral_gap():
+    for k in (2, 3, 5):
+        x, _ = _blobs([12] * k, seed=k)
+        assert graph.choose_n_clusters(graph.affinity(x), 10) == k
+
+
+def test_fusion_keeps_what_the_views_agree_on():
+    """Two views share the true grouping; each also has a grouping of its own that crosses it.
+    Each view alone is cut along either; the fused graph is cut along the shared one."""
+    from sklearn.metrics import adjusted_rand_score
+    rng = np.random.default_rng(0)
+    n = 60
+    shared = np.repeat([0, 1], 30)
+    own1, own2 = np.tile([0, 1], 30), rng.permutation(shared)
+    v1 = np.c_[np.eye(2)[shared], 0.9 * np.eye(2)[own1]] + 0.1 * rng.normal(size=(n, 4))
+    v2 = np.c_[np.eye(2)[shared], 0.9 * np.eye(2)[own2]] + 0.1 * rng.normal(size=(n, 4))
+    fused = graph.fuse([graph.affinity(v1), graph.affinity(v2)])
+    assert adjusted_rand_score(shared, graph.partition(fused, 2)) == 1.0
+    weights_one = graph.fuse([graph.affinity(v1), graph.affinity(v2)], [1.0, 0.0])
+    np.testing.assert_allclose(weights_one, graph.affinity(v1))
