@@ -14,7 +14,7 @@ from sklearn.cross_decomposition import CCA
 from sklearn.decomposition import PCA
 from sklearn.preprocessing import StandardScaler
 
-from .scaling import SCALINGS, scale_views
+from .scaling import scale_views
 
 
 class ConcatFusion(BaseEstimator):

@@ -7,18 +7,13 @@ on a grid, truth as custom properties and the 'style_truth' face attribute), DIR
 from __future__ import annotations
 
 import csv
-import math
 import os
 import sys
 import time
 
-import bpy
-
 from .. import meshio, sample
 from ..meshes import InputError, validate
 from . import scene
-
-GRID_SPACING = 3.0   # metres between shapes in the .blend, so a person can look at them
 
 
 def run(args) -> int:
@@ -45,12 +40,7 @@ def run(args) -> int:
             if (i + 1) % 20 == 0 or i + 1 == len(shapes):
                 print(f"wrote {i + 1}/{len(shapes)} OBJ + truth files", file=sys.stderr)
 
-    scene.empty_session()
-    names = scene.objects_from_meshes(shapes, "Sample")
-    cols = max(1, math.ceil(math.sqrt(len(names))))
-    for i, n in enumerate(names):
-        bpy.data.objects[n].location = ((i % cols) * GRID_SPACING, (i // cols) * GRID_SPACING, 0.0)
-    scene.save_blend(os.path.join(out, "sample.blend"))
+    names = scene.write_blend(shapes, os.path.join(out, "sample.blend"), "Sample")
     print(f"saved {os.path.join(out, 'sample.blend')} ({len(names)} objects) "
           f"in {time.time() - t0:.1f} s", file=sys.stderr)
     return 0

@@ -216,6 +216,22 @@ def empty_session() -> None:
     bpy.ops.wm.read_homefile(use_empty=True, use_factory_startup=True, load_ui=False)
 
 
+GRID_SPACING = 3.0   # metres between shapes in a written .blend, so a person can look at them
+
+
+def write_blend(meshes, path, collection_name: str) -> list[str]:
+    """A fresh scene holding the meshes on a grid in one collection, saved to `path`; the
+    object names. The `sample` command writes its .blend this way, the benchmark too."""
+    import math
+    empty_session()
+    names = objects_from_meshes(meshes, collection_name)
+    cols = max(1, math.ceil(math.sqrt(len(names))))
+    for i, n in enumerate(names):
+        bpy.data.objects[n].location = ((i % cols) * GRID_SPACING, (i // cols) * GRID_SPACING, 0.0)
+    save_blend(path)
+    return names
+
+
 def save_blend(path) -> None:
     """Save the session to `path` as a copy (the session keeps its own file path)."""
     path = os.path.abspath(os.fspath(path))

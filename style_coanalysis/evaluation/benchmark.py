@@ -36,7 +36,7 @@ import sys
 import tempfile
 import time
 import zlib
-from dataclasses import dataclass, field, replace
+from dataclasses import dataclass, field
 from functools import lru_cache
 from typing import Callable, Iterable, Sequence
 
@@ -545,8 +545,8 @@ def _ari_by_name(ref_names, ref_pred, names, pred) -> float:
 def variant_meshes(meshes, kind: str, workdir: str):
     """The same shapes (a) scaled by 1.0000001, or written with the project's writers and read
     back as `python -m style_coanalysis analyze` reads its INPUT: (b) a folder of OBJ files
-    (meshio.write_obj, then the Blender importer), (c) a .blend (scene.objects_from_meshes on a
-    grid as the `sample` command lays them out, scene.save_blend, then the .blend reader)."""
+    (meshio.write_obj, then the Blender importer), (c) a .blend (scene.write_blend, as the `sample` command
+    writes its own, then the .blend reader)."""
     from ..meshes import Mesh
     if kind == "scaled":
         return [Mesh(m.name, (m.vertices.astype(np.float64) * SCALE).astype(np.float32), m.faces,
@@ -566,21 +566,11 @@ def _variant_through_blender(meshes, kind: str, workdir: str):
             meshio.write_obj(m, os.path.join(folder, f"{m.name}.obj"))
         return load_input(folder, None)
     if kind == "blend":
-        import math
-
-        import bpy
-
         from ..blender import scene
-        from ..blender.cmd_sample import GRID_SPACING
-        bpy.ops.wm.read_factory_settings(use_empty=True)
-        names = scene.objects_from_meshes(meshes, "Shapes")
-        cols = max(1, math.ceil(math.sqrt(len(names))))
-        for i, n in enumerate(names):
-            bpy.data.objects[n].location = ((i % cols) * GRID_SPACING, (i // cols) * GRID_SPACING, 0.0)
         path = os.path.join(workdir, "shapes.blend")
-        scene.save_blend(path)
+        scene.write_blend(meshes, path, "Shapes")
         loaded = load_input(path, None)
-        bpy.ops.wm.read_factory_settings(use_empty=True)
+        scene.empty_session()
         return loaded
     raise ValueError(f"unknown variant '{kind}'")
 
