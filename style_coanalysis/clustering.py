@@ -346,7 +346,7 @@ class TripletClustering(ClusterMixin, BaseEstimator):
     1. Each triplet (a, b, c) -> must-link (a, b), cannot-link (a, c).
     2. * Must-links are closed transitively (connected components) and cannot-links lifted to
        whole components: with 300 label-derived triplets on 120 shapes the closure turns 300
-       must-links into ~1,700 implied pairs (measured, bench_semisupervised.py).
+       must-links into ~1,700 implied pairs (measured on the sample collection).
     3. * A is the cosine similarity of the fused features in a metric learned from the
        constraints (:func:`pair_metric`, coordinates that differ as much inside must-linked
        pairs as across cannot-linked ones are switched off). The paper's A = V^T V is the
@@ -473,7 +473,7 @@ class TripletClustering(ClusterMixin, BaseEstimator):
         dc[comp[ii], comp[jj]] = True
         # the vote adds the constrained spectral assignment to the memberships: measured on the
         # sample collection with 100 label-derived triplets, SNMF alone 0.86 purity, spectral
-        # start 0.95, both 0.95 (3 seeds; bench_semisupervised.py)
+        # start 0.95, both 0.95 (3 seeds, sample collection)
         score = memb + np.eye(C)[lab0]
         self.labels_ = _assign_components(score, comp, dc, C) if C > 1 else np.zeros(n, int)
         self.objective_history_ = np.array(history)
