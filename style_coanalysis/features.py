@@ -51,6 +51,17 @@ def hog_images(images: np.ndarray) -> np.ndarray:
     return out
 
 
+def collection_maps(drawings, step=None) -> np.ndarray:
+    """HOG maps of every shape's views: (N, V, by, bx, 36). `step(i, n)` is called before each
+    shape (progress and cancel)."""
+    maps = []
+    for i, d in enumerate(drawings):
+        if step is not None:
+            step(i, len(drawings))
+        maps.append(hog_images(d.images))
+    return np.stack(maps)
+
+
 def patch_blocks(size: int) -> int:
     """Blocks along one side of a patch descriptor: a 48-pixel patch is 6 cells = 5 blocks."""
     cells = max(CELLS_PER_BLOCK, int(round(size / PIXELS_PER_CELL)))

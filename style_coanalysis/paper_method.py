@@ -73,7 +73,7 @@ from scipy.optimize import nnls
 from .clustering import SelfTuningSpectralClustering, TripletClustering
 from .drawings import ShapeDrawings
 from .encoding import EPS, FilterBank, representatives, unit_rows
-from .features import PIXELS_PER_CELL, hog_images, patch_descriptors
+from .features import PIXELS_PER_CELL, collection_maps, patch_descriptors
 from .meshes import InputError
 from .params import AnalysisParams
 from .patches import Patches, extract_patches
@@ -340,11 +340,7 @@ def analyse_paper(drawings: list[ShapeDrawings], params: AnalysisParams,
 
     if maps is None:
         t = time.perf_counter()
-        maps = []
-        for i, d in enumerate(drawings):
-            prog.step("hog", i, n)
-            maps.append(hog_images(d.images))
-        maps = np.stack(maps)                                  # (N, V, by, bx, C)
+        maps = collection_maps(drawings, lambda i, total: prog.step("hog", i, total))
         timings["hog"] = time.perf_counter() - t
     maps = np.asarray(maps, np.float32)
     if maps.shape[:2] != (n, n_views):

@@ -37,7 +37,7 @@ from scipy.optimize import linear_sum_assignment
 from .constraints import labels_to_array, triplets_to_array, validate_labels, validate_triplets
 from .drawings import ShapeDrawings
 from .encoding import frequency_features, shared_bank, word_counts
-from .features import hog_images, line_character
+from .features import collection_maps, line_character
 from .meshes import InputError
 from .params import AnalysisParams
 from .patches import extract_patches
@@ -306,11 +306,7 @@ def analyse(drawings: list[ShapeDrawings], params: AnalysisParams,
 
     if maps is None:
         t = time.perf_counter()
-        maps = []
-        for i, d in enumerate(drawings):
-            prog.step("hog", i, n)
-            maps.append(hog_images(d.images))
-        maps = np.stack(maps)                                 # (N, V, by, bx, C)
+        maps = collection_maps(drawings, lambda i, total: prog.step("hog", i, total))
         timings["hog"] = time.perf_counter() - t
 
     t = time.perf_counter()

@@ -268,7 +268,7 @@ def draw(meshes, jobs: int = 0, log: Log = _stderr, what: str = ""):
     """(meshes kept, drawings with the analysis' seeds, HOG maps, skipped) through the user cache."""
     from ..blender.batch import draw_collection
     from ..blender.job import seed_subset
-    from ..features import hog_images
+    from ..features import collection_maps
     last = [0.0]
 
     def progress(stage, done, total):
@@ -281,7 +281,7 @@ def draw(meshes, jobs: int = 0, log: Log = _stderr, what: str = ""):
     by = {d.name: seed_subset(d, ANALYSIS_SEEDS) for d in drawings}
     kept = [m for m in meshes if m.name in by]
     drawings = [by[m.name] for m in kept]
-    maps = np.stack([hog_images(d.images) for d in drawings]) if drawings else None
+    maps = collection_maps(drawings) if drawings else None
     return kept, drawings, maps, skipped
 
 
