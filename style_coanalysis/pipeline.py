@@ -34,6 +34,7 @@ from dataclasses import dataclass, field
 import numpy as np
 from scipy.optimize import linear_sum_assignment
 
+from . import graph
 from .constraints import labels_to_array, triplets_to_array, validate_labels, validate_triplets
 from .drawings import ShapeDrawings
 from .encoding import frequency_features, shared_bank, word_counts
@@ -43,6 +44,7 @@ from .params import AnalysisParams
 from .patches import extract_patches
 from .progress import Progress
 from .reselection import reselect
+from .views import fusion_views, neighbour_ladder, structure_relative
 
 FUSIONS = ("graph", "pslf", "concat", "pca", "cca")
 
@@ -154,7 +156,6 @@ def _style_graph(views, params, y, fusion):
     fusion "graph" (default): the mean of the views' graphs. The other fusions fuse the views'
     features first and build one graph of the result, for comparison: "pslf" (paper 4.3, its
     learned view weights; the views shifted to be non-negative), "concat", "pca", "cca"."""
-    from . import graph
     if fusion == "graph":
         graphs = [graph.affinity(v) for v in views]
         weights = np.full(len(views), 1.0 / len(views))
@@ -204,7 +205,6 @@ def _label_transduction(a: np.ndarray, y: np.ndarray, n_classes: int, random_sta
     Preferring spreading instead (the partition only when clearly better) lowered the voxel set
     (2 labels per style 0.581 -> 0.529, 20% labels 0.636 -> 0.601, 3 seeds, one round), though
     on `make demo` spreading would give 0.950 where the named partition gives 0.917."""
-    from . import graph
     lab = np.flatnonzero(y >= 0)
     folds = []
     for i in lab:
@@ -231,7 +231,6 @@ def _label_transduction(a: np.ndarray, y: np.ndarray, n_classes: int, random_sta
 def _cluster(a, params, y, trip, n_clusters):
     """(clusters, confidence, n_clusters) in the mode the constraints ask for, from the fused
     style graph `a`."""
-    from . import graph
     rs = params.random_state
     fused = _coordinates(a, params)
     if y is not None:
@@ -255,7 +254,6 @@ def _cluster(a, params, y, trip, n_clusters):
 def _coordinates(a: np.ndarray, params: AnalysisParams) -> np.ndarray:
     """The shapes' spectral coordinates in the style graph (N, d): what the style distance,
     triplet clustering and the report's map use."""
-    from . import graph
     _, u = graph.embedding(a, params.n_style_dims + 1)
     return u[:, 1:]
 
@@ -290,8 +288,6 @@ def analyse(drawings: list[ShapeDrawings], params: AnalysisParams,
         return analyse_paper(drawings, params, labels, triplets, progress, cancel, maps)
     if params.method != "default":
         raise InputError(f"unknown method '{params.method}', choose 'default' or 'paper'")
-    from . import graph
-    from .views import fusion_views, structure_relative, neighbour_ladder
     timings: dict[str, float] = {}
     prog = Progress.wrap(progress, cancel)
     names, y, classes, trip = _check_inputs(drawings, params, labels, triplets, fusion)
