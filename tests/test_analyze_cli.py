@@ -10,6 +10,7 @@ import sys
 from pathlib import Path
 
 import pytest
+from bad_blend import write_blend_with_bad_vertex
 
 ROOT = Path(__file__).resolve().parent.parent
 pytestmark = [pytest.mark.blender, pytest.mark.slow]
@@ -165,18 +166,7 @@ def test_mesh_without_faces_leaves_too_few_shapes(tmp_path):
 
 def test_nan_coordinates_are_refused_naming_the_object(tmp_path):
     blend = tmp_path / "nan.blend"
-    code = f"""
-import bpy, bmesh
-bpy.ops.wm.read_factory_settings(use_empty=True)
-for name, bad in (("Good", False), ("Broken", True), ("Other", False)):
-    me = bpy.data.meshes.new(name)
-    bm = bmesh.new(); bmesh.ops.create_cube(bm, size=1.0); bm.to_mesh(me); bm.free()
-    if bad:
-        me.vertices[0].co = (float('nan'), 0.0, 0.0)
-    bpy.context.scene.collection.objects.link(bpy.data.objects.new(name, me))
-bpy.ops.wm.save_as_mainfile(filepath={str(blend)!r})
-"""
-    subprocess.run([sys.executable, "-c", code], check=True, capture_output=True, timeout=120)
+    write_blend_with_bad_vertex(blend, "Broken", "float('nan')")
     before = blend.read_bytes()
     expect_refusal(["analyze", blend, "--out", tmp_path / "o", "--renderer", "lineart"], "Broken", "NaN")
     assert blend.read_bytes() == before

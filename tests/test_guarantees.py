@@ -5,7 +5,6 @@ Real parts only: the real command in a subprocess, real imports of real files, r
 """
 import hashlib
 import json
-import os
 import re
 import signal
 import struct
@@ -17,6 +16,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from bad_blend import write_blend_with_bad_vertex
 
 ROOT = Path(__file__).resolve().parent.parent
 pytestmark = pytest.mark.blender
@@ -221,18 +221,7 @@ def test_corrupt_coordinates_in_files_are_refused_by_name(tmp_path, kind):
 
 def test_absurd_coordinates_in_a_blend_are_refused_by_name(tmp_path):
     blend = tmp_path / "big.blend"
-    code = f"""
-import bpy, bmesh
-bpy.ops.wm.read_factory_settings(use_empty=True)
-for name, bad in (("Good", False), ("Huge", True), ("Other", False)):
-    me = bpy.data.meshes.new(name)
-    bm = bmesh.new(); bmesh.ops.create_cube(bm, size=1.0); bm.to_mesh(me); bm.free()
-    if bad:
-        me.vertices[0].co = (3.4e38, 0.0, 0.0)
-    bpy.context.scene.collection.objects.link(bpy.data.objects.new(name, me))
-bpy.ops.wm.save_as_mainfile(filepath={str(blend)!r})
-"""
-    subprocess.run([sys.executable, "-c", code], check=True, capture_output=True, timeout=120)
+    write_blend_with_bad_vertex(blend, "Huge", "3.4e38")
     refused(run_cmd("analyze", blend, "--out", tmp_path / "o", "--renderer", "lineart"),
             "'Huge'", "absurd")
 
