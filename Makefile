@@ -20,11 +20,15 @@ setup: system-deps
 	  echo "$(REQ_SHA)" > $(STAMP); \
 	fi
 
+# Debian's libvulkan1 (bpy needs libvulkan.so.1) and chromium (the report's browser test)
 system-deps:
-	@if ! ldconfig -p 2>/dev/null | grep -q 'libvulkan.so.1'; then \
-	  echo "installing Debian's libvulkan1 (bpy needs libvulkan.so.1)"; \
+	@missing=""; \
+	ldconfig -p 2>/dev/null | grep -q 'libvulkan.so.1' || missing="$$missing libvulkan1"; \
+	command -v chromium >/dev/null || missing="$$missing chromium"; \
+	if [ -n "$$missing" ]; then \
+	  echo "installing Debian's$$missing"; \
 	  SUDO=$$( [ "$$(id -u)" = 0 ] || echo sudo ); \
-	  $$SUDO apt-get update -qq && $$SUDO apt-get install -y -qq libvulkan1 >/dev/null; \
+	  $$SUDO apt-get update -qq && $$SUDO apt-get install -y -qq $$missing >/dev/null; \
 	fi
 
 test: setup
