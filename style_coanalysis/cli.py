@@ -23,6 +23,9 @@ def _add_drawing_options(p: argparse.ArgumentParser) -> None:
     p.add_argument("--jobs", type=int, default=0,
                    help="parallel processes for per-shape work (default 0: all cores)")
     p.add_argument("--cache", help="drawing cache folder (default: a folder under the user cache)")
+    p.add_argument("--scheduler", metavar="ADDRESS",
+                   help="draw the shapes on the Dask cluster of this scheduler (tcp://host:8786; "
+                        "needs dask[distributed], see README) instead of --jobs local processes")
     p.add_argument("--suggestive-contours", action="store_true",
                    help="also draw suggestive contours (paper's choice; slower, see README)")
 

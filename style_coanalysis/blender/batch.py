@@ -14,11 +14,15 @@ Where rendering happens is decided first, and bpy never runs off the main thread
   import bpy: there, and with jobs=1, shapes render in this process on the calling (main) thread,
   in steps of one view (`render.draw_shape_steps`), so the modal operator keeps the UI responsive.
   Freestyle/Cycles still use every core for the rendering itself.
+- Inside `dask_cluster.use_scheduler(address)` (the command line's `--scheduler`), uncached
+  shapes are drawn on that Dask cluster instead, and `jobs` is not used (`dask_cluster`).
 Spawned workers re-import the caller's `__main__`: scripts that call `draw_collection` with
 jobs != 1 need the usual `if __name__ == "__main__":` guard.
 """
 from __future__ import annotations
 
+import contextlib
+import contextvars
 import multiprocessing
 import os
 import queue as queue_module
@@ -39,6 +43,25 @@ from ..progress import Cancelled
 
 Progress = Callable[[str, int, int], None]
 WAIT_S = 0.1                # the parent's poll interval while workers render
+# The Dask client of the enclosing `dask_cluster.use_scheduler` block: a context rather than an
+# argument, so the job and its options need not know about Dask (an optional dependency).
+cluster: contextvars.ContextVar = contextvars.ContextVar("style_coanalysis_cluster", default=None)
+
+
+@contextlib.contextmanager
+def use_scheduler(address: str | None):
+    """Within the block, uncached shapes are drawn on the Dask cluster at `address` (None or "":
+    here, as `jobs` says). Dask is imported only when an address is given."""
+    if not address:
+        yield None
+        return
+    try:
+        from . import dask_cluster
+    except ImportError as exc:
+        raise InputError(f"--scheduler needs Dask on this machine ({exc}): "
+                         "pip install 'dask[distributed]' (README: running on many machines)") from None
+    with dask_cluster.use_scheduler(address) as client:
+        yield client
 
 
 def in_blender_gui() -> bool:
@@ -168,7 +191,11 @@ def draw_steps(meshes: Sequence[Mesh], settings: DrawingSettings, cache_dir=None
 
     n_workers = effective_jobs(jobs, len(todo))
     yield ("render", 0, len(todo), None)
-    if n_workers <= 1:
+    client = cluster.get()
+    if client is not None and todo:
+        from .dask_cluster import render_on_cluster
+        yield from render_on_cluster(client, todo, settings, finish, skipped)
+    elif n_workers <= 1:
         from .render import draw_shape_steps
         for done, (i, mesh, key) in enumerate(todo):
             steps = draw_shape_steps(mesh, settings)

@@ -16,7 +16,7 @@ from pathlib import Path
 from .. import report
 from ..meshes import InputError, normalise
 from ..options import PARAMETERS, build_options, check_output, load_constraints, publish
-from . import scene
+from . import batch, scene
 from .job import run_steps
 
 
@@ -88,19 +88,20 @@ def run(args) -> int:
     # 2. the shapes and the constraint files that name them; the job checks the rest
     # (analysable shapes, cluster count) before its first render
     progress = StderrProgress()
-    meshes = load_input(args.input, args.collection)
-    if not meshes:
-        raise InputError(f"'{args.input}' contains no mesh")
-    load_constraints(options, [m.name for m in meshes])
-    progress("load", len(meshes), len(meshes))
+    with batch.use_scheduler(getattr(args, "scheduler", None)):   # connects now: errors first
+        meshes = load_input(args.input, args.collection)
+        if not meshes:
+            raise InputError(f"'{args.input}' contains no mesh")
+        load_constraints(options, [m.name for m in meshes])
+        progress("load", len(meshes), len(meshes))
 
-    steps = run_steps(meshes, options)
-    while True:
-        try:
-            progress(*next(steps))
-        except StopIteration as stop:
-            job = stop.value
-            break
+        steps = run_steps(meshes, options)
+        while True:
+            try:
+                progress(*next(steps))
+            except StopIteration as stop:
+                job = stop.value
+                break
     for name, reason in job.skipped:
         print(f"warning: skipped '{name}': {reason}", file=sys.stderr)
 

@@ -84,8 +84,9 @@ def run(args) -> int:
                   file=sys.stderr, flush=True)
 
     t0 = time.time()
-    drawings, skipped = batch.draw_collection(meshes, settings, cache_dir=cache_dir,
-                                              jobs=getattr(args, "jobs", 0), progress=progress)
+    with batch.use_scheduler(getattr(args, "scheduler", None)):
+        drawings, skipped = batch.draw_collection(meshes, settings, cache_dir=cache_dir,
+                                                  jobs=getattr(args, "jobs", 0), progress=progress)
     for name, reason in skipped:
         print(f"warning: skipped '{name}': {reason}", file=sys.stderr)
     if not drawings:
