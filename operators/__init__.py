@@ -6,9 +6,9 @@ registered first because the operators and panels read them, and unregistered la
 import bpy
 
 from ..style_coanalysis.blender import properties
-from . import analyse, constraints, decimation, results
+from . import analyse, constraints, decimation, results, uses
 
-_modules = (analyse, constraints, results, decimation)
+_modules = (analyse, constraints, results, uses, decimation)
 
 
 def register():

@@ -11,7 +11,7 @@ import traceback
 
 import bpy
 
-from ..style_coanalysis.blender import properties, writeback
+from ..style_coanalysis.blender import properties, space_store, writeback
 from ..style_coanalysis.meshes import InputError
 from ..style_coanalysis.options import PARAMETERS, build_options, check_coordinates, check_shapes
 from ..style_coanalysis.progress import Cancelled
@@ -203,6 +203,7 @@ class STYLE_OT_analyse(bpy.types.Operator):
     def _finish(self, context, result):
         try:
             summary = writeback.write_results(context.scene, result)
+            space_store.write_scene(context.scene, result.style_space)   # for operators/uses.py
         except writeback.WritebackError as exc:
             self.report({"ERROR"}, f"Results not written: {exc}")
             return {"CANCELLED"}

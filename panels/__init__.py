@@ -160,6 +160,31 @@ class VIEW3D_PT_style_results(_StylePanel, bpy.types.Panel):
         col.operator("style.clear_results", icon="TRASH")
 
 
+class VIEW3D_PT_style_uses(_StylePanel, bpy.types.Panel):
+    """Find shapes of the same style and what to label next (inside Results)."""
+    bl_label = "Similar Style and What to Label"
+    bl_parent_id = "VIEW3D_PT_style_results"
+
+    def draw(self, context):
+        from ..operators.uses import SIMILAR_KEY, SUGGESTED_KEY, read_list
+        from ..style_coanalysis.blender.writeback import has_results
+        layout = self.layout
+        layout.operator("style.select_similar", icon="RESTRICT_SELECT_OFF")
+        similar = read_list(context.scene, SIMILAR_KEY)
+        if similar and has_results(context.scene.objects.get(similar["query"])):
+            box = layout.box()
+            box.label(text=f"Closest in style to {similar['query']}:")
+            for k, (name, dist, cluster) in enumerate(similar["ranked"], start=1):
+                box.label(text=f"{k}. {name}  ({dist:.3f}, cluster {cluster})")
+        layout.operator("style.suggest_labels", icon="QUESTION")
+        suggested = read_list(context.scene, SUGGESTED_KEY)
+        if suggested and any(has_results(context.scene.objects.get(n)) for n, _ in suggested):
+            box = layout.box()
+            for k, (name, reason) in enumerate(suggested, start=1):
+                box.label(text=f"{k}. {name}")
+                box.label(text=f"    {reason}")
+
+
 class VIEW3D_PT_style_decimate(_StylePanel, bpy.types.Panel):
     bl_label = "Decimate"
     bl_options = {"DEFAULT_CLOSED"}
@@ -205,7 +230,8 @@ class OBJECT_PT_style_results(bpy.types.Panel):
 
 CLASSES = (STYLE_UL_labels, STYLE_UL_triplets, STYLE_UL_clusters, VIEW3D_PT_style,
            VIEW3D_PT_style_advanced, VIEW3D_PT_style_labels, VIEW3D_PT_style_triplets,
-           VIEW3D_PT_style_results, VIEW3D_PT_style_decimate, OBJECT_PT_style_results)
+           VIEW3D_PT_style_results, VIEW3D_PT_style_uses, VIEW3D_PT_style_decimate,
+           OBJECT_PT_style_results)
 
 
 def register():

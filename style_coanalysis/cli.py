@@ -59,13 +59,27 @@ def build_parser() -> argparse.ArgumentParser:
     for option in PARAMETERS:   # defaults and help from params.AnalysisParams (one place)
         kind = type(default(option))
         p.add_argument(f"--{option}", type=kind, default=None, help=help_text(option))
+
+    p = sub.add_parser("similar", help="rank the analysed shapes by style distance to one of them")
+    p.add_argument("result", help="the --out folder of an analyze run")
+    p.add_argument("name", nargs="?", help="the shape to rank the others against")
+    p.add_argument("--top", type=int, default=10, help="how many to list (default 10)")
+    p.add_argument("--triplets", help="CSV of a,b,c held out from the analysis: print the share "
+                   "the style distance gets right (a closer to b than to c)")
+
+    p = sub.add_parser("suggest-labels", help="which unlabelled shapes to label next")
+    p.add_argument("result", help="the --out folder of an analyze run")
+    p.add_argument("--n", type=int, default=5, help="how many shapes to suggest (default 5)")
+    p.add_argument("--out", help="CSV to write (default: standard output); name,style rows with "
+                   "the style left empty for you to fill in, then pass it to analyze --labels")
     return parser
 
 
 def main(argv: list[str] | None = None) -> int:
     args = build_parser().parse_args(argv)
     try:
-        module = importlib.import_module(f".blender.cmd_{args.command}", package=__package__)
+        module = importlib.import_module(f".blender.cmd_{args.command.replace('-', '_')}",
+                                         package=__package__)
         return int(module.run(args) or 0)
     except InputError as exc:
         print(f"error: {exc}", file=sys.stderr)

@@ -39,7 +39,8 @@ METHOD_HELP = ("'default' (this extension's method, see README) or 'paper' (sect
                "as written)")
 
 # What `analyze` writes into --out; a folder holding anything else is not ours to replace.
-RESULT_ENTRIES = ("result.blend", "result.blend1", "report.json", "report.html", "images")
+RESULT_ENTRIES = ("result.blend", "result.blend1", "report.json", "report.html", "images",
+                  "style_space.npz")
 
 
 def default(option: str):

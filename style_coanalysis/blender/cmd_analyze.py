@@ -107,8 +107,12 @@ def run(args) -> int:
 
     # 3. results: written into a temporary folder beside --out, then moved into place whole
     def write(folder: Path) -> None:
+        from ..similarity import SPACE_FILE
+        from .space_store import write_scene
         from .writeback import write_results
         write_results(bpy.context.scene, job, progress=progress)
+        write_scene(bpy.context.scene, job.style_space)   # for the later uses, in result.blend
+        job.style_space.save(folder / SPACE_FILE)         # ... and for the headless commands
         progress("save result.blend", 0, 1)
         bpy.ops.wm.save_as_mainfile(filepath=str((folder / "result.blend").resolve()), copy=True)
         progress("save result.blend", 1, 1)

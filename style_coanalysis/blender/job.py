@@ -54,6 +54,7 @@ class JobResult:
     analysis: object = None             # pipeline.AnalysisResult
     drawings: list = field(default_factory=list)
     localisations: list = field(default_factory=list)
+    style_space: object = None          # similarity.StyleSpace: what the later uses read
 
 
 def camera_matrix(rig: Rig, view: int, centre, radius: float, up: str) -> list:
@@ -207,8 +208,12 @@ def _run_steps(meshes: list[Mesh], options: JobOptions):
             label = str(names[np.argmax(counts)])
         clusters.append({"id": c, "size": len(members), "members": members, "label": label})
     report = build_report(good, shapes, clusters, skipped, options, timings, result, locs)
+    from ..similarity import StyleSpace
+    space = StyleSpace.from_result(result, triplets=options.triplets,
+                                   random_state=options.params.random_state)
     yield ("done", len(good), len(good))
-    yield JobResult(shapes, clusters, sorted(skipped.items()), report, result, drawings, locs)
+    yield JobResult(shapes, clusters, sorted(skipped.items()), report, result, drawings, locs,
+                    space)
 
 
 def seed_subset(d, n: int):

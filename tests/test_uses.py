@@ -1,0 +1,152 @@
+"""The uses of an analysis end to end (issue 14): `analyze` writes the style space, `similar` and
+`suggest-labels` read it headless, and the Style panel's buttons run as real operators on the
+saved result.blend. Real parts only: sample shapes, Line Art drawings, the real analysis."""
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+from style_coanalysis.constraints import read_labels_csv
+from style_coanalysis.meshes import InputError
+from style_coanalysis.options import check_output
+from style_coanalysis.similarity import SPACE_FILE, StyleSpace
+from style_coanalysis.suggest import suggest
+
+bpy = pytest.importorskip("bpy")
+ROOT = Path(__file__).resolve().parent.parent
+pytestmark = [pytest.mark.blender, pytest.mark.slow]
+
+
+def run_cmd(*args, timeout=900):
+    return subprocess.run([sys.executable, "-m", "style_coanalysis", *map(str, args)], cwd=ROOT,
+                          capture_output=True, text=True, timeout=timeout)
+
+
+@pytest.fixture(scope="module")
+def result(tmp_path_factory):
+    """An analysed 12-shape sample: (result folder, its style space)."""
+    base = tmp_path_factory.mktemp("uses")
+    res = run_cmd("sample", "--out", base / "sample", "--size", 12, "--seed", 5)
+    assert res.returncode == 0, res.stderr[-3000:]
+    out = base / "result"
+    res = run_cmd("analyze", base / "sample" / "sample.blend", "--out", out, "--renderer",
+                  "lineart", "--jobs", 2, "--cache", base / "cache", "--rounds", 2)
+    assert res.returncode == 0, res.stderr[-3000:]
+    return out, StyleSpace.load(out)
+
+
+def test_analyze_writes_the_style_space(result):
+    import json
+    out, space = result
+    shapes = [s["name"] for s in json.loads((out / "report.json").read_text())["shapes"]]
+    assert sorted(space.names) == sorted(shapes)
+    assert space.features.shape[0] == len(shapes)
+    check_output(out)       # a result with its style space may be replaced by the next run
+
+
+def test_similar_prints_the_ranking(result):
+    out, space = result
+    name = space.names[3]
+    res = run_cmd("similar", out, name, "--top", 4)
+    assert res.returncode == 0, res.stderr
+    rows = [line.split(",") for line in res.stdout.splitlines()[2:]]
+    assert [r[1] for r in rows] == [n for n, _ in space.ranking(name, 4)]
+    dist = [float(r[2]) for r in rows]
+    assert dist == sorted(dist) and name not in [r[1] for r in rows]
+
+
+def test_similar_scores_triplets(result, tmp_path):
+    out, space = result
+    a, others = space.names[0], [n for n, _ in space.ranking(space.names[0])]
+    csv = tmp_path / "held_out.csv"
+    csv.write_text(f"a,b,c\n{a},{others[0]},{others[-1]}\n{a},{others[-1]},{others[1]}\n")
+    res = run_cmd("similar", out, "--triplets", csv)
+    assert res.returncode == 0, res.stderr
+    assert "triplet accuracy 0.500 (1 of 2 triplets" in res.stdout
+
+
+def test_similar_refuses_bad_input(result, tmp_path):
+    out, _ = result
+    res = run_cmd("similar", out, "Nope")
+    assert res.returncode == 2 and "'Nope' is not among the analysed shapes" in res.stderr
+    assert res.stdout == ""
+    res = run_cmd("similar", tmp_path, "x")
+    assert res.returncode == 2 and f"holds no {SPACE_FILE}" in res.stderr
+    res = run_cmd("similar", out)
+    assert res.returncode == 2 and "give a shape NAME" in res.stderr
+
+
+def test_suggest_labels_writes_a_labels_csv(result, tmp_path):
+    out, space = result
+    target = tmp_path / "next.csv"
+    res = run_cmd("suggest-labels", out, "--n", 3, "--out", target)
+    assert res.returncode == 0, res.stderr
+    rows = [l for l in target.read_text().splitlines() if l and not l.startswith("#")]
+    assert rows[0] == "name,style"
+    names = [r.rstrip(",") for r in rows[1:]]
+    assert names == [p.name for p in suggest(space, 3)]
+    with pytest.raises(InputError, match="expected 'name,style'"):   # styles still to fill in
+        read_labels_csv(target, space.names)
+    filled = target.read_text().replace(f"{names[0]},", f"{names[0]},A") \
+        .replace(f"{names[1]},", f"{names[1]},B").replace(f"{names[2]},", f"{names[2]},A")
+    target.write_text(filled)
+    assert read_labels_csv(target, space.names) == {names[0]: "A", names[1]: "B", names[2]: "A"}
+
+
+def test_suggest_labels_refuses_to_write_into_the_result(result):
+    out, _ = result
+    before = sorted(p.name for p in out.iterdir())
+    res = run_cmd("suggest-labels", out, "--out", out / "next.csv")
+    assert res.returncode == 2 and "inside the result folder" in res.stderr
+    assert sorted(p.name for p in out.iterdir()) == before
+    res = run_cmd("suggest-labels", out, "--n", 0)
+    assert res.returncode == 2 and "--n must be at least 1" in res.stderr
+
+
+def selected():
+    return {o.name for o in bpy.context.view_layer.objects if o.select_get()}
+
+
+def test_buttons_on_the_saved_result(result, ext, tmp_path):
+    out, space = result
+    bpy.ops.wm.open_mainfile(filepath=str(out / "result.blend"))
+    scene = bpy.context.scene
+    name = space.names[2]
+    bpy.context.view_layer.objects.active = bpy.data.objects[name]
+    assert bpy.ops.style.select_similar(count=3) == {"FINISHED"}
+    want = [n for n, _ in space.ranking(name, 3)]
+    assert selected() == {name, *want}
+    assert bpy.context.view_layer.objects.active.name == name
+    from style_coanalysis_ext.operators.uses import SIMILAR_KEY, SUGGESTED_KEY, read_list
+    assert [r[0] for r in read_list(scene, SIMILAR_KEY)["ranked"]] == want
+
+    # suggestions skip shapes labelled since the analysis (Labels panel)
+    picks = [p.name for p in suggest(space, 2)]
+    assert bpy.ops.style.suggest_labels(count=2) == {"FINISHED"}
+    assert selected() == set(picks)
+    assert [n for n, _ in read_list(scene, SUGGESTED_KEY)] == picks
+    bpy.data.objects[picks[0]].style_coanalysis.label = "Mine"
+    assert bpy.ops.style.suggest_labels(count=2) == {"FINISHED"}
+    assert picks[0] not in selected() and len(selected()) == 2
+
+    # an object the analysis never saw: the button says why it cannot run
+    mesh = bpy.data.meshes.new("New")
+    mesh.from_pydata([(0, 0, 0), (1, 0, 0), (0, 1, 0)], [], [(0, 1, 2)])
+    obj = bpy.data.objects.new("New", mesh)
+    scene.collection.objects.link(obj)
+    bpy.context.view_layer.objects.active = obj
+    assert not bpy.ops.style.select_similar.poll()
+    with pytest.raises(RuntimeError, match="'New' was not in the last style analysis"):
+        bpy.ops.style.select_similar()
+
+    # the space survives save and reload; Clear Results switches both buttons off
+    path = str(tmp_path / "saved.blend")
+    bpy.ops.wm.save_as_mainfile(filepath=path)
+    bpy.ops.wm.open_mainfile(filepath=path)
+    bpy.context.view_layer.objects.active = bpy.data.objects[name]
+    assert bpy.ops.style.select_similar(count=3) == {"FINISHED"}
+    assert selected() == {name, *want}
+    assert bpy.ops.style.clear_results() == {"FINISHED"}
+    assert not bpy.ops.style.select_similar.poll()
+    assert not bpy.ops.style.suggest_labels.poll()
