@@ -1,0 +1,223 @@
+"""Whole-job scale benchmark: seconds per stage, seconds per shape, peak memory (issue 15).
+
+    nice -n 10 .venv/bin/python bench/bench_scale.py [--sizes 120 500 1050]
+        [--renderers lineart freestyle] [--jobs 1 2] [--analysis-sizes 120 1050 5000]
+        [--work /tmp/sca_scale]
+
+Part 1, the whole headless job (`job.run_steps`: draw, HOG, analyse, localise) on the first N
+shapes of the sample collection, per renderer and number of jobs, from an empty drawing cache;
+then once more on the same shapes (the cache's worth: the second run over the first). Part 2, the
+analysis alone: the sample's drawings repeated to N shapes (renamed copies hit the drawing cache,
+so drawing costs only the cache reads) to see how HOG, analysis and regions grow with N.
+
+Each measurement runs in a fresh process, so its peak memory (the largest resident set of the
+process and of its drawing workers) is its own; a process that grows past --mem-limit-gb is
+stopped (this machine is shared) and reported as such. Figures are ratios within one run of
+this script: the machine is shared, absolute seconds are noisy. Asserts nothing.
+"""
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import resource
+import subprocess
+import sys
+import tempfile
+import threading
+import time
+from dataclasses import replace
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parent.parent
+sys.path.insert(0, str(ROOT))
+
+STAGES = ("render", "hog", "analyse", "localise")
+
+
+# ---------------------------------------------------------------- one measurement (a child)
+def sample_meshes(size: int, repeat_of: int | None):
+    """The first `size` sample shapes, or the first `repeat_of` repeated (renamed) to `size`."""
+    from style_coanalysis import sample
+    if not repeat_of:
+        return sample.generate(size=size, seed=0)
+    base = sample.generate(size=repeat_of, seed=0)
+    return [replace(base[i % len(base)], name=f"{base[i % len(base)].name}~{i // len(base)}")
+            for i in range(size)]
+
+
+def peak_rss_mb() -> float:
+    """Largest resident set of this process and of any child it waited for (Linux: KiB)."""
+    own = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss
+    kids = resource.getrusage(resource.RUSAGE_CHILDREN).ru_maxrss
+    return max(own, kids) / 1024.0
+
+
+def measure(size: int, renderer: str, jobs: int, cache: str, repeat_of: int | None) -> dict:
+    import bpy
+    from style_coanalysis.blender.job import run_steps
+    from style_coanalysis.options import build_options
+    bpy.ops.wm.read_factory_settings(use_empty=True)
+    meshes = sample_meshes(size, repeat_of)
+    options = build_options(jobs=jobs, cache_dir=cache)
+    options = replace(options, renderer=renderer)    # also a renderer options.py does not list yet
+    t0 = time.perf_counter()
+    steps = run_steps(meshes, options)
+    while True:
+        try:
+            next(steps)
+        except StopIteration as stop:
+            job = stop.value
+            break
+    wall = time.perf_counter() - t0
+    seconds = job.report["seconds"]
+    scores = job.report.get("scores", {}).get("style", {})
+    return {"size": size, "renderer": renderer, "jobs": jobs, "repeat_of": repeat_of,
+            "wall": wall, "seconds": {k: seconds.get(k, 0.0) for k in STAGES},
+            "shapes": len(job.shapes), "skipped": len(job.skipped),
+            "purity": scores.get("purity"), "peak_mb": peak_rss_mb()}
+
+
+# ---------------------------------------------------------------- the parent
+def run_child(args: list[str], mem_limit_gb: float) -> dict:
+    """Run one measurement in a fresh process; stop its process tree past the memory limit."""
+    import psutil
+    proc = subprocess.Popen([sys.executable, __file__, "_one", *args], stdout=subprocess.PIPE,
+                            stderr=subprocess.PIPE, text=True)
+    over = threading.Event()
+
+    def watch():
+        p = psutil.Process(proc.pid)
+        while proc.poll() is None:
+            try:
+                rss = sum(q.memory_info().rss for q in [p, *p.children(recursive=True)])
+            except psutil.Error:
+                rss = 0
+            if rss > mem_limit_gb * 2 ** 30:
+                over.set()
+                for q in [*p.children(recursive=True), p]:
+                    try:
+                        q.kill()
+                    except psutil.Error:
+                        pass
+                return
+            time.sleep(0.5)
+    threading.Thread(target=watch, daemon=True).start()
+    out, err = proc.communicate()
+    if over.is_set():
+        return {"error": f"stopped above {mem_limit_gb:g} GB"}
+    lines = [line for line in out.splitlines() if line.startswith("RESULT ")]
+    if proc.returncode != 0 or not lines:
+        tail = (err.strip().splitlines() or [""])[-1]
+        return {"error": f"exit code {proc.returncode}: {tail[:200]}"}
+    return json.loads(lines[-1][7:])
+
+
+def row(label: str, r: dict) -> str:
+    if "error" in r:
+        return f"{label:34s} {r['error']}"
+    s = r["seconds"]
+    per = r["wall"] / max(1, r["size"])
+    return (f"{label:34s} {r['wall']:8.1f} " + " ".join(f"{s[k]:8.1f}" for k in STAGES)
+            + f" {per:8.3f} {r['peak_mb']:8.0f}"
+            + (f" {r['purity']:6.3f}" if r.get("purity") is not None else ""))
+
+
+HEADER = (f"{'':34s} {'total s':>8s} " + " ".join(f"{k + ' s':>8s}" for k in STAGES)
+          + f" {'s/shape':>8s} {'peak MB':>8s} {'purity':>6s}")
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    ap.add_argument("--sizes", type=int, nargs="*", default=[120, 500, 1050])
+    ap.add_argument("--renderers", nargs="*", default=["lineart", "freestyle"])
+    ap.add_argument("--jobs", type=int, nargs="*", default=[1, 2])
+    ap.add_argument("--analysis-sizes", type=int, nargs="*", default=[120, 1050, 5000])
+    ap.add_argument("--analysis-base", type=int, default=120,
+                    help="part 2 repeats the drawings of this many sample shapes")
+    ap.add_argument("--analysis-renderer", default="lineart",
+                    help="renderer of the drawings repeated in part 2")
+    ap.add_argument("--work", default=None, help="folder for the drawing caches (default: a "
+                    "temporary folder, removed at the end)")
+    ap.add_argument("--mem-limit-gb", type=float, default=12.0)
+    args = ap.parse_args()
+    work = Path(args.work or tempfile.mkdtemp(prefix="sca_scale_"))
+    work.mkdir(parents=True, exist_ok=True)
+    print(f"caches under {work}; {os.cpu_count()} cores", flush=True)
+
+    if args.sizes:
+        print("\n## The whole job from an empty cache, then again on the same shapes")
+        print(HEADER)
+        first = {}
+        for size in args.sizes:
+            for renderer in args.renderers:
+                for jobs in args.jobs:
+                    cache = work / f"cache-{renderer}-{size}-{jobs}"
+                    a = ["--size", str(size), "--renderer", renderer, "--jobs", str(jobs),
+                         "--cache", str(cache)]
+                    r = run_child(a, args.mem_limit_gb)
+                    first[size, renderer, jobs] = r
+                    print(row(f"{size} {renderer} jobs={jobs}", r), flush=True)
+                    again = run_child(a, args.mem_limit_gb)
+                    print(row(f"{size} {renderer} jobs={jobs} again", again), flush=True)
+                    if "error" not in r and "error" not in again:
+                        print(f"{'':34s} second run / first: {again['wall'] / r['wall']:.2f}",
+                              flush=True)
+        print("\n## Ratios (the same run)")
+        for size in args.sizes:
+            for renderer in args.renderers:
+                one, two = first.get((size, renderer, 1)), first.get((size, renderer, 2))
+                if one and two and "error" not in one and "error" not in two:
+                    print(f"{size} {renderer}: 2 jobs over 1 job, whole job "
+                          f"{one['wall'] / two['wall']:.2f}x, drawing "
+                          f"{one['seconds']['render'] / max(1e-9, two['seconds']['render']):.2f}x")
+            if len(args.renderers) > 1:
+                for jobs in args.jobs:
+                    rs = {r: first.get((size, r, jobs)) for r in args.renderers}
+                    if all(v and "error" not in v for v in rs.values()):
+                        slow = max(rs, key=lambda k: rs[k]["seconds"]["render"])
+                        for r, v in rs.items():
+                            if r != slow:
+                                print(f"{size} jobs={jobs}: drawing {slow} / {r} "
+                                      f"{rs[slow]['seconds']['render'] / v['seconds']['render']:.1f}x"
+                                      f", whole job {rs[slow]['wall'] / v['wall']:.1f}x")
+
+    if args.analysis_sizes:
+        print(f"\n## Analysis alone: the drawings of {args.analysis_base} sample shapes ({args.analysis_renderer})"
+              " repeated to N shapes, warm cache, 1 job")
+        print(HEADER)
+        cache = work / f"cache-repeat-{args.analysis_renderer}"
+        run_child(["--size", str(args.analysis_base), "--renderer", args.analysis_renderer, "--jobs", "2",
+                   "--cache", str(cache)], args.mem_limit_gb)           # fills the cache
+        base = None
+        for size in args.analysis_sizes:
+            r = run_child(["--size", str(size), "--renderer", args.analysis_renderer, "--jobs", "1",
+                           "--cache", str(cache), "--repeat-of", str(args.analysis_base)], args.mem_limit_gb)
+            print(row(f"N={size}", r), flush=True)
+            if "error" in r:
+                continue
+            per = {k: r["seconds"][k] / size for k in ("hog", "analyse", "localise")}
+            if base is None:
+                base = per
+            print(f"{'':34s} per shape vs N={args.analysis_sizes[0]}: " + ", ".join(
+                f"{k} {per[k] / max(1e-9, base[k]):.2f}x" for k in per), flush=True)
+
+
+def one() -> None:
+    ap = argparse.ArgumentParser()
+    ap.add_argument("_one")
+    ap.add_argument("--size", type=int, required=True)
+    ap.add_argument("--renderer", required=True)
+    ap.add_argument("--jobs", type=int, required=True)
+    ap.add_argument("--cache", required=True)
+    ap.add_argument("--repeat-of", type=int, default=None)
+    a = ap.parse_args()
+    r = measure(a.size, a.renderer, a.jobs, a.cache, a.repeat_of)
+    print("RESULT " + json.dumps(r), flush=True)
+
+
+if __name__ == "__main__":
+    if len(sys.argv) > 1 and sys.argv[1] == "_one":
+        one()
+    else:
+        main()
