@@ -1,8 +1,9 @@
-"""Renderer benchmark: speed, Freestyle/Line Art agreement, cost vs face count, suggestive contours.
+"""Renderer benchmark: the whole drawing step (lines, seeds, visibility) of Freestyle, Line Art
+and zbuffer, their agreement with Freestyle, cost vs face count, suggestive contours.
 
-Run with `nice .venv/bin/python bench/bench_render.py [--shapes 6]`. Everything runs in one
-process, one shape at a time (no cache, no workers), so the ratios compare like with like.
-Prints tables; asserts nothing.
+Run with `nice .venv/bin/python bench/bench_render.py [--shapes 6] [--real DIR --up y]`.
+Everything runs in one process, one shape at a time, one render thread (no cache, no workers),
+so the ratios compare like with like. Prints tables; asserts nothing.
 """
 from __future__ import annotations
 
@@ -58,59 +59,68 @@ def sphere(segments: int, name: str = "") -> Mesh:
 
 def timed(mesh: Mesh, settings: DrawingSettings):
     t = time.perf_counter()
-    d = draw_shape(mesh, settings)
+    d = draw_shape(mesh, settings, threads=1)
     return d, time.perf_counter() - t
+
+
+RENDERERS = ("freestyle", "lineart", "zbuffer")
+
+
+def compare(meshes: list[Mesh], title: str) -> None:
+    """Whole drawing step per renderer (lines, seeds, visibility), one thread each, and each
+    renderer's agreement with Freestyle: lines (F-score within 2 px) and vertex visibility."""
+    sets = {r: DrawingSettings(renderer=r) for r in RENDERERS}
+    print(f"\n## {title}: whole drawing step (12 views, seeds, visibility), 1 thread")
+    print(f"{'shape':28s} {'faces':>7s} {'FS s':>6s} {'LA s':>6s} {'ZB s':>6s} {'F LA':>6s} "
+          f"{'F ZB':>6s} {'vis ZB':>6s}")
+    total = dict.fromkeys(RENDERERS, 0.0)
+    f_la, f_zb, vis = [], [], []
+    for m in meshes:
+        out, took = {}, {}
+        for r in RENDERERS:
+            out[r], took[r] = timed(m, sets[r])
+            total[r] += took[r]
+        ref = out["freestyle"]
+        f_la.append(np.mean([f_score(ref.images[v] > INK, out["lineart"].images[v] > INK)
+                             for v in range(ref.n_views)]))
+        f_zb.append(np.mean([f_score(ref.images[v] > INK, out["zbuffer"].images[v] > INK)
+                             for v in range(ref.n_views)]))
+        vis.append(float((out["zbuffer"].vertex_visible == ref.vertex_visible).mean()))
+        print(f"{m.name[:28]:28s} {len(m.faces):7d} " + " ".join(f"{took[r]:6.2f}" for r in RENDERERS)
+              + f" {f_la[-1]:6.3f} {f_zb[-1]:6.3f} {vis[-1]:6.3f}", flush=True)
+    fs = total["freestyle"]
+    print("whole step, Freestyle over the others (same run): "
+          + ", ".join(f"{r} {fs / total[r]:.1f}x" for r in RENDERERS[1:]))
+    print(f"lines vs Freestyle's, F-score within 2 px (mean over views, then shapes): Line Art "
+          f"{np.mean(f_la):.3f} (min {np.min(f_la):.3f}), zbuffer {np.mean(f_zb):.3f} "
+          f"(min {np.min(f_zb):.3f})")
+    print(f"vertex visibility, zbuffer's depth buffers vs the ray casts: {np.mean(vis):.4f} of "
+          f"(view, vertex) pairs agree (min shape {np.min(vis):.4f})")
 
 
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__)
     ap.add_argument("--shapes", type=int, default=6, help="shapes of the sample collection")
+    ap.add_argument("--real", default=None, help="also a folder of real mesh files (OBJ...)")
+    ap.add_argument("--up", default="y", help="up axis of the --real meshes (default y)")
     args = ap.parse_args()
     bpy.ops.wm.read_factory_settings(use_empty=True)
     meshes = [normalise(m) for m in sample_meshes(args.shapes)]
-    fs_set, la_set = DrawingSettings(renderer="freestyle"), DrawingSettings(renderer="lineart")
-    draw_shape(meshes[0], la_set)     # warm-up (first Cycles/Line Art use loads kernels)
+    for r in RENDERERS:                # warm-up (first Cycles/Line Art use loads kernels)
+        draw_shape(meshes[0], DrawingSettings(renderer=r))
+    compare(meshes, f"{len(meshes)} sample shapes")
+    if args.real:
+        from style_coanalysis.blender.scene import import_mesh_files
+        real = sorted(import_mesh_files(args.real), key=lambda m: m.name)
+        compare([normalise(m, args.up) for m in real], f"{len(real)} real meshes ({args.real})")
 
-    print(f"\n## Speed and agreement on {len(meshes)} sample shapes (200x200, 12 views)")
-    print(f"{'shape':28s} {'faces':>7s} {'FS s':>6s} {'LA s':>6s} {'F2px':>6s} {'seed vis':>8s}")
-    from style_coanalysis.blender.render import draw_lines
-    t_fs = t_la = l_fs = l_la = 0.0
-    scores, vis = [], []
-    for m in meshes:
-        dfs, tf = timed(m, fs_set)
-        dla, tl = timed(m, la_set)
-        t_fs, t_la = t_fs + tf, t_la + tl
-        t = time.perf_counter()
-        draw_lines(m, fs_set)
-        t_mid = time.perf_counter()
-        draw_lines(m, la_set)
-        l_fs, l_la = l_fs + t_mid - t, l_la + time.perf_counter() - t_mid
-        f = np.mean([f_score(dfs.images[v] > INK, dla.images[v] > INK) for v in range(dfs.n_views)])
-        scores.append(f)
-        vis.append(dfs.seed_visible.mean())
-        print(f"{m.name:28s} {len(m.faces):7d} {tf:6.2f} {tl:6.2f} {f:6.3f} {vis[-1]:8.2f}")
-    views = 12 * len(meshes)
-    print(f"\nlines only (the renderers themselves): Freestyle {views / l_fs:6.1f} views/s   "
-          f"Line Art {views / l_la:6.1f} views/s   ratio {l_fs / l_la:4.1f}x")
-    print(f"whole drawing step (+ seeds and ray-cast visibility, the same for both): Freestyle "
-          f"{views / t_fs:6.1f} views/s   Line Art {views / t_la:6.1f} views/s   ratio {t_fs / t_la:4.1f}x")
-    print(f"agreement F-score (2 px, mean over views): {np.mean(scores):.3f} "
-          f"(min shape {np.min(scores):.3f})")
-    print(f"seed visibility rate (seeds visible per view): {np.mean(vis):.3f}")
-
-    print("\n## Time per shape (12 views) vs face count")
-    print(f"{'faces':>7s} {'FS s':>6s} {'LA s':>6s} {'FS+SC s':>8s} {'vis s':>6s}")
-    from style_coanalysis.blender import render
+    print("\n## Time per shape (12 views, whole step, 1 thread) vs face count")
+    print(f"{'faces':>7s} {'FS s':>6s} {'LA s':>6s} {'ZB s':>6s} {'FS+SC s':>8s}")
     for segments in (32, 64, 128):                # about 2k, 8k and 32k triangles
         m = normalise(sphere(segments))
-        _, tf = timed(m, fs_set)
-        _, tl = timed(m, la_set)
+        took = [timed(m, DrawingSettings(renderer=r))[1] for r in RENDERERS]
         _, ts = timed(m, DrawingSettings(renderer="freestyle", suggestive_contours=True))
-        t = time.perf_counter()
-        tree = render._bvh(m)
-        render.ray_visibility(tree, render.rig_for(fs_set), m.vertices, faces=m.faces)
-        tv = time.perf_counter() - t
-        print(f"{len(m.faces):7d} {tf:6.2f} {tl:6.2f} {ts:8.2f} {tv:6.2f}")
+        print(f"{len(m.faces):7d} " + " ".join(f"{t:6.2f}" for t in took) + f" {ts:8.2f}")
 
 
 if __name__ == "__main__":

@@ -16,8 +16,9 @@ from .options import DEFAULTS, METHOD_HELP, METHODS, PARAMETERS, default, help_t
 
 
 def _add_drawing_options(p: argparse.ArgumentParser) -> None:
-    p.add_argument("--renderer", choices=("freestyle", "lineart"), default="freestyle",
-                   help="line renderer: freestyle (faithful, default) or lineart (fast)")
+    p.add_argument("--renderer", choices=("freestyle", "lineart", "zbuffer"), default="freestyle",
+                   help="line renderer: freestyle (faithful, default), lineart (fast) or zbuffer "
+                        "(fastest: depth buffers in numpy, no render engine)")
     p.add_argument("--up", choices=("z", "y"), default="z", help="up axis of the assets (default z)")
     p.add_argument("--collection", help="with a .blend INPUT: analyse only this collection's meshes")
     p.add_argument("--jobs", type=int, default=0,

@@ -96,6 +96,7 @@ def expected_lines(mesh, drawings, trim=0.12):
 
 
 SHAPES = {"cube": cube, "step": stepped_block}
+RENDERERS = ("freestyle", "lineart", "zbuffer")
 
 
 @pytest.fixture(scope="module")
@@ -106,7 +107,7 @@ def drawn():
     out = {}
     for name, make in SHAPES.items():
         mesh = normalise(make())
-        for renderer in ("freestyle", "lineart"):
+        for renderer in RENDERERS:
             out[name, renderer] = (mesh, draw_shape(mesh, DrawingSettings(renderer=renderer)))
     return out
 
@@ -120,7 +121,7 @@ def pixel_mask(px, size=200):
     return mask
 
 
-@pytest.mark.parametrize("renderer", ["freestyle", "lineart"])
+@pytest.mark.parametrize("renderer", RENDERERS)
 @pytest.mark.parametrize("shape", list(SHAPES))
 def test_ink_on_visible_edges_and_nowhere_else(drawn, shape, renderer):
     mesh, d = drawn[shape, renderer]
@@ -154,10 +155,11 @@ def test_far_side_seed_is_invisible():
     assert vis[6].tolist() == [False, True]        # camera 6 sits on the -x side
 
 
-def test_seed_visibility_matches_facing_on_cube(drawn):
+@pytest.mark.parametrize("renderer", ["freestyle", "zbuffer"])
+def test_seed_visibility_matches_facing_on_cube(drawn, renderer):
     """On a convex shape a surface point is visible exactly when its face faces the camera
     (up to the one-pixel depth slack: points within ~a pixel of a cube edge may go either way)."""
-    mesh, d = drawn["cube", "freestyle"]
+    mesh, d = drawn["cube", renderer]
     normals = face_normals(mesh)[d.seed_faces]
     to_cam = Rig().locations()[:, None, :] - d.seeds[None].astype(float)
     facing = np.einsum("vsk,sk->vs", to_cam, normals) > 1e-6
@@ -173,8 +175,9 @@ def test_seed_visibility_matches_facing_on_cube(drawn):
     assert np.allclose(d.seed_pixels, pix, atol=1e-3) and (depth > 0).all()
 
 
-def test_vertex_visibility_matches_facing_on_cube(drawn):
-    mesh, d = drawn["cube", "lineart"]
+@pytest.mark.parametrize("renderer", ["lineart", "zbuffer"])
+def test_vertex_visibility_matches_facing_on_cube(drawn, renderer):
+    mesh, d = drawn["cube", renderer]
     normals = face_normals(mesh)
     cams = Rig().locations()
     for v in range(12):
@@ -203,12 +206,42 @@ def f_score(a, b, radius=2.0):
     return 2 * precision * recall / (precision + recall)
 
 
+@pytest.mark.parametrize("other", ["lineart", "zbuffer"])
 @pytest.mark.parametrize("shape", list(SHAPES))
-def test_renderers_agree(drawn, shape):
+def test_renderers_agree(drawn, shape, other):
     _, fs = drawn[shape, "freestyle"]
-    _, la = drawn[shape, "lineart"]
+    _, la = drawn[shape, other]
     scores = [f_score(fs.images[v] > 0.25, la.images[v] > 0.25) for v in range(12)]
     assert min(scores) > 0.85, scores
+
+
+@pytest.mark.parametrize("shape", list(SHAPES))
+def test_zbuffer_visibility_is_the_ray_casts(drawn, shape):
+    """The depth buffers' vertex visibility against a BVH ray cast per vertex and camera."""
+    from style_coanalysis.blender.render import _bvh, ray_visibility
+    mesh, d = drawn[shape, "zbuffer"]
+    rays = ray_visibility(_bvh(mesh), Rig(), mesh.vertices, faces=mesh.faces)
+    assert np.array_equal(d.vertex_visible, rays)
+
+
+def test_zbuffer_open_surface_seen_from_behind():
+    """A single-sided plane is drawn from both sides: back faces are only left out of the
+    depth buffers when the surface is closed."""
+    from style_coanalysis.blender.render import draw_shape
+    v = np.array([[-1, -1, 0], [1, -1, 0], [1, 1, 0], [-1, 1, 0]], float)
+    up = normalise(Mesh("up", v, [[0, 1, 2], [0, 2, 3]]))
+    down = normalise(Mesh("down", v, [[0, 2, 1], [0, 3, 2]]))
+    a = draw_shape(up, DrawingSettings(renderer="zbuffer"))
+    b = draw_shape(down, DrawingSettings(renderer="zbuffer"))
+    assert a.images.sum() > 0 and np.array_equal(a.images, b.images)
+    assert np.array_equal(a.vertex_visible, b.vertex_visible) and a.vertex_visible.all()
+
+
+def test_zbuffer_refuses_suggestive_contours():
+    from style_coanalysis.blender.render import draw_shape
+    from style_coanalysis.meshes import InputError
+    with pytest.raises(InputError, match="no suggestive contours"):
+        draw_shape(normalise(cube()), DrawingSettings(renderer="zbuffer", suggestive_contours=True))
 
 
 def test_no_leaks_and_user_scene_untouched():
@@ -222,7 +255,7 @@ def test_no_leaks_and_user_scene_untouched():
         return {attr: len(getattr(bpy.data, attr)) for attr in dir(bpy.data)
                 if isinstance(getattr(bpy.data, attr, None), bpy.types.bpy_prop_collection)}
     before = counts()
-    for renderer in ("freestyle", "lineart"):
+    for renderer in RENDERERS:
         draw_shape(mesh, DrawingSettings(renderer=renderer))
     assert counts() == before
     assert bpy.context.scene.name == user_scene

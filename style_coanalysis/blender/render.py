@@ -2,7 +2,7 @@
 
 `draw_shape(mesh, settings)` builds a temporary scene (never the user's), renders every view with
 the chosen renderer, tests seed and vertex visibility by ray casting, removes everything it made
-and returns a `ShapeDrawings`:
+and returns a `ShapeDrawings` (the "zbuffer" renderer makes no scene and casts no BVH ray):
 
 - "freestyle" (faithful): Cycles on the CPU, 1 sample, only the strokes (a Holdout material
   override and a transparent film: the PNG's alpha is the ink). Silhouettes, borders, dihedral
@@ -10,6 +10,10 @@ and returns a `ShapeDrawings`:
 - "lineart" (fast): one Grease Pencil Line Art modifier per camera (each with its own custom
   camera, so one depsgraph evaluation computes every view); the strokes' 3D points are projected
   with the rig and rasterised as 1-pixel polylines. No render engine; no suggestive contours.
+
+- "zbuffer" (fastest): no Blender at all (`zbuffer.ShapeBuffers`): one depth buffer per view
+  rasterised in numpy; the same silhouettes, borders and creases as Freestyle, and seeds and
+  vertex visibility, are lookups in it. No suggestive contours.
 
 Cameras match `rig.Rig` exactly (location, orientation, horizontal field of view), so the rig's
 matrices describe the Blender renders to within a pixel (tested with `world_to_camera_view`).
@@ -33,6 +37,7 @@ from ..meshes import InputError, Mesh
 from ..params import DrawingSettings
 from ..rig import Rig, project
 from ..seeds import sample_seeds
+from ..zbuffer import ShapeBuffers
 
 PREFIX = "SCA_tmp_"
 VISIBILITY_TOL_PX = 1.0     # depth slack of the visibility test, in pixels' worth at the point
@@ -420,10 +425,42 @@ VISIBILITY_CHUNK = 20000    # ray casts per step: well under half a second here
 def draw_lines(mesh: Mesh, settings: DrawingSettings, threads: int = 0) -> np.ndarray:
     """The (V, H, W) ink images alone, with the chosen renderer (no seeds, no visibility)."""
     rig = rig_for(settings)
+    if settings.renderer == "zbuffer":
+        return ShapeBuffers(mesh.vertices, mesh.faces, rig.matrices(), rig.locations(),
+                            settings.image_size, rig.focal_px).lines(settings.crease_angle_deg)
     with TempScene(mesh, rig) as ts:
         if settings.renderer == "freestyle":
             return _render_freestyle(ts, settings, threads)
         return _render_lineart(ts, settings, rig)
+
+
+RENDERERS = ("freestyle", "lineart", "zbuffer")
+
+
+def _zbuffer_steps(mesh: Mesh, settings: DrawingSettings, rig: Rig):
+    """`draw_shape_steps` for the "zbuffer" renderer: every answer from one set of depth buffers."""
+    if settings.suggestive_contours:
+        raise InputError("the zbuffer renderer draws no suggestive contours: use freestyle")
+    buffers = ShapeBuffers(mesh.vertices, mesh.faces, rig.matrices(), rig.locations(),
+                           settings.image_size, rig.focal_px)
+    yield "depth buffers"
+
+    def seen_somewhere(points, faces):
+        return buffers.points_visible(points, own_face=faces).any(axis=0)
+
+    seeds, seed_faces = sample_seeds(mesh, settings.n_seeds, settings.seed, keep=seen_somewhere)
+    seed_visible = buffers.points_visible(seeds, own_face=seed_faces)
+    yield "seeds"
+    vertex_visible = buffers.points_visible(mesh.vertices,
+                                            vertex_ids=np.arange(len(mesh.vertices)))
+    yield "visibility"
+    images = buffers.lines(settings.crease_angle_deg)
+    seed_pixels, _ = project(rig.matrices(), seeds)
+    yield f"views {rig.n_views}/{rig.n_views}"
+    return ShapeDrawings(
+        name=mesh.name, images=images, cameras=rig.matrices(), seeds=seeds, seed_faces=seed_faces,
+        seed_visible=seed_visible, seed_pixels=seed_pixels.astype(np.float32),
+        vertex_visible=vertex_visible)
 
 
 def draw_shape(mesh: Mesh, settings: DrawingSettings, threads: int = 0) -> ShapeDrawings:
@@ -444,11 +481,13 @@ def draw_shape_steps(mesh: Mesh, settings: DrawingSettings, threads: int = 0):
     one step per UI event never blocks the interface for long. Closing the generator removes
     the temporary scene.
     """
-    if settings.renderer not in ("freestyle", "lineart"):
-        raise InputError(f"unknown renderer '{settings.renderer}' (use 'freestyle' or 'lineart')")
+    if settings.renderer not in RENDERERS:
+        raise InputError(f"unknown renderer '{settings.renderer}' (use {', '.join(RENDERERS)})")
     if len(mesh.faces) == 0:
         raise InputError(f"'{mesh.name}' has no faces")
     rig = rig_for(settings)
+    if settings.renderer == "zbuffer":
+        return (yield from _zbuffer_steps(mesh, settings, rig))
     tree = _bvh(mesh)
     n_views = rig.n_views
 

@@ -1,0 +1,342 @@
+"""The fast drawing path: feature lines and visibility from one depth buffer per view, in numpy.
+
+Why: Freestyle spends seconds a shape finding which edges are visible, and the ray-cast
+visibility of seeds and vertices (one BVH query per point and camera) costs as much again. Here
+each view is rasterised once into a depth buffer holding, per pixel, the nearest surface's depth
+and triangle; every visibility question of that view (line samples, seeds, vertices) is then a
+vectorised lookup in it. No render engine, no Blender: the same function runs anywhere.
+
+Lines are the ones Freestyle draws with this extension's settings (`render._setup_freestyle`):
+- silhouettes: edges between a face turned towards the camera and one turned away (face normals,
+  no smoothing, as `use_smoothness=False`);
+- borders: edges of one face;
+- creases: edges whose faces meet at a dihedral angle below `crease_angle_deg` (Freestyle's
+  crease angle; Blender's default 134 degrees).
+No suggestive contours (their definition needs curvature; Freestyle draws them).
+
+Visibility: a line sample is seen when one of the 4 pixel centres around it holds nothing, a
+surface no nearer than the sample less about one pixel's worth of depth (`TOL_PX`), or a face of
+its edge (`seen_in_buffer`); seeds and vertices get the ray cast of the other renderers, with the
+buffer's triangles as the candidate occluders (`ray_visible`).
+"""
+from __future__ import annotations
+
+import numpy as np
+
+from .rig import project
+
+TOL_PX = 1.0                # depth slack, in pixels' worth of depth at the point
+STEP_PX = 0.5               # spacing of the samples along a line, in pixels
+MAX_PAIRS = 4_000_000       # (triangle, pixel) candidates rasterised at once (memory bound)
+
+
+def _expand(counts: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """For items with `counts`, every (item, k) with k < count: (items, ks), vectorised."""
+    items = np.repeat(np.arange(len(counts)), counts)
+    ks = np.arange(len(items)) - np.repeat(np.cumsum(counts) - counts, counts)
+    return items, ks
+
+
+def _spans(lo: np.ndarray, hi: np.ndarray, size: int) -> tuple[np.ndarray, np.ndarray]:
+    """Pixel indices whose centres (i + 0.5) lie in [lo, hi], clipped to the image: first, count."""
+    first = np.clip(np.ceil(lo - 0.5), 0, size).astype(np.int64)
+    last = np.clip(np.floor(hi - 0.5), -1, size - 1).astype(np.int64)
+    return first, np.maximum(0, last - first + 1)
+
+
+def rasterise(pixels: np.ndarray, depth: np.ndarray, faces: np.ndarray, size: int
+              ) -> tuple[np.ndarray, np.ndarray]:
+    """Depth buffer of one view: (size, size) nearest depth (inf: nothing) and triangle (-1).
+
+    `pixels` (N, 2) and `depth` (N,) are the projected vertices (`rig.project`); a pixel is
+    covered when its centre lies in the triangle. Scanlines: each triangle's rows, then the
+    span of each row, so the work is the pixels covered (thin slanted triangles cost no more
+    than their area). Depth is interpolated perspective-correctly (1/depth is linear).
+    """
+    zbuf = np.full(size * size, np.inf)
+    tri_id = np.full(size * size, -1, np.int64)
+    tri = pixels[faces].astype(np.float64)                      # (M, 3, 2)
+    inv = 1.0 / depth[faces]                                    # (M, 3)
+    a, b, c = tri[:, 0], tri[:, 1], tri[:, 2]
+    area = (b[:, 0] - a[:, 0]) * (c[:, 1] - a[:, 1]) - (b[:, 1] - a[:, 1]) * (c[:, 0] - a[:, 0])
+    ok = (np.abs(area) > 1e-12) & (depth[faces] > 0).all(axis=1) & np.isfinite(tri).all(axis=(1, 2))
+    # 1/depth = plane . (x, y, 1) across each triangle (perspective-correct interpolation):
+    # the plane through the points (x, y, 1/depth) of its corners
+    pts = np.concatenate([tri, inv[..., None]], axis=2)
+    normal = np.cross(pts[:, 1] - pts[:, 0], pts[:, 2] - pts[:, 0])
+    with np.errstate(divide="ignore", invalid="ignore"):
+        plane = np.stack([-normal[:, 0], -normal[:, 1], np.einsum("ij,ij->i", normal, pts[:, 0])],
+                         axis=1) / normal[:, 2:3]
+    # corners by height: a row's span runs from the long edge (top to bottom) to the top-middle
+    # edge above the middle corner, to the middle-bottom edge below it
+    by_y = np.take_along_axis(tri, np.argsort(tri[:, :, 1], axis=1)[..., None], axis=1)
+    top, mid, bot = by_y[:, 0], by_y[:, 1], by_y[:, 2]
+    with np.errstate(divide="ignore", invalid="ignore"):
+        slopes = [(q[:, 0] - p[:, 0]) / (q[:, 1] - p[:, 1]) for p, q in
+                  ((top, bot), (top, mid), (mid, bot))]
+    edges = np.nan_to_num(np.stack([top[:, 0], top[:, 1], mid[:, 0], mid[:, 1], *slopes], axis=1),
+                          nan=0.0, posinf=0.0, neginf=0.0)
+    row0, n_rows = _spans(top[:, 1], bot[:, 1], size)
+    n_rows[~ok] = 0
+    # chunks of triangles with at most MAX_PAIRS rows between them (memory bound)
+    ends = np.cumsum(n_rows)
+    start = 0
+    while start < len(faces):
+        base = ends[start - 1] if start else 0
+        stop = max(start + 1, int(np.searchsorted(ends, base + MAX_PAIRS, side="right")))
+        t, k = _expand(n_rows[start:stop])
+        t += start
+        row = row0[t] + k
+        y = row + 0.5
+        tx, ty, mx, my, k_long, k_top, k_bot = edges[t].T
+        x_long = tx + (y - ty) * k_long
+        x_short = np.where(y < my, tx + (y - ty) * k_top, mx + (y - my) * k_bot)
+        col0, n_cols = _spans(np.minimum(x_long, x_short), np.maximum(x_long, x_short), size)
+        r, kc = _expand(n_cols)
+        ids, row, col = t[r], row[r], col0[r] + kc
+        pl = plane[ids]
+        z = 1.0 / (pl[:, 0] * (col + 0.5) + pl[:, 1] * (row + 0.5) + pl[:, 2])
+        pix = row * size + col
+        np.minimum.at(zbuf, pix, z)
+        won = z <= zbuf[pix]                # the nearest at its pixel (ties: the last)
+        tri_id[pix[won]] = ids[won]
+        start = stop
+    return zbuf.reshape(size, size), tri_id.reshape(size, size)
+
+
+def pad(zbuf: np.ndarray, tri_id: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """A buffer with a one-pixel frame of nothing: what `seen_in_buffer` and `ray_visible` take."""
+    return np.pad(zbuf, 1, constant_values=np.inf), np.pad(tri_id, 1, constant_values=-1)
+
+
+def _window(zbuf: np.ndarray, tri_id: np.ndarray, pixels: np.ndarray):
+    """Per point: inside the image, and the depths and triangles (n, 4) of the 2x2 pixels whose
+    centres surround it (`zbuf`, `tri_id` padded by `pad`)."""
+    size = zbuf.shape[0] - 2
+    finite = np.isfinite(pixels).all(axis=1)
+    x = np.where(finite, pixels[:, 0], -10.0)
+    y = np.where(finite, pixels[:, 1], -10.0)
+    inside = finite & (x >= 0) & (x < size) & (y >= 0) & (y < size)
+    col = np.floor(np.where(inside, x, 0.0) - 0.5).astype(np.int64) + 1    # padded index
+    row = np.floor(np.where(inside, y, 0.0) - 0.5).astype(np.int64) + 1
+    flat = (row * (size + 2) + col)[:, None] + np.array([0, 1, size + 2, size + 3])[None]
+    return inside, zbuf.ravel()[flat], tri_id.ravel()[flat]
+
+
+def _cross(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """Row-wise cross product (np.cross costs several times more on short rows)."""
+    return np.stack([a[:, 1] * b[:, 2] - a[:, 2] * b[:, 1], a[:, 2] * b[:, 0] - a[:, 0] * b[:, 2],
+                     a[:, 0] * b[:, 1] - a[:, 1] * b[:, 0]], axis=1)
+
+
+def seen_in_buffer(zbuf: np.ndarray, tri_id: np.ndarray, pixels: np.ndarray, depth: np.ndarray,
+                   own, focal_px: float) -> np.ndarray:
+    """(n,) bool for line samples: one of the 4 pixel centres around the sample holds nothing, a
+    surface no nearer than its depth less `TOL_PX` pixels' worth, or a triangle of its own
+    (`own(tri_ids (n, 4)) -> bool (n, 4)`). Four, not one: a line lies on a depth edge, where
+    the nearest pixel centre may fall on either side."""
+    inside, z, t = _window(zbuf, tri_id, pixels)
+    slack = (depth * (1.0 - TOL_PX / focal_px))[:, None]
+    return inside & ((z >= slack) | ((t >= 0) & own(t))).any(axis=1)
+
+
+def ray_visible(zbuf: np.ndarray, tri_id: np.ndarray, pixels: np.ndarray, points: np.ndarray,
+                depth: np.ndarray, own, camera: np.ndarray, vertices: np.ndarray,
+                faces: np.ndarray, neighbours: np.ndarray, focal_px: float) -> np.ndarray:
+    """(n,) bool for seeds and vertices: `render.ray_visibility`'s ray cast, vectorised, with
+    the depth buffer in place of a BVH.
+
+    The buffer proposes the occluders: the triangles nearest the camera at the 4 pixel centres
+    around the point's projection, and their edge neighbours (the surface along the exact ray
+    may be a neighbour's). A point is hidden when the segment from the camera to it crosses
+    one of them that it does not lie on (`own(tri_ids, rows) -> bool`) short of the point by
+    more than `TOL_PX` pixels' worth of depth. Only points with a nearer surface in some but
+    not all of the window's pixels are tested exactly: with none they are seen, with nearer
+    surfaces all around they are hidden.
+    """
+    n = len(points)
+    inside, z, t = _window(zbuf, tri_id, pixels)
+    slack = depth * (1.0 - TOL_PX / focal_px)
+    rows = np.repeat(np.arange(n), 4).reshape(n, 4)
+    mine = np.zeros((n, 4), bool)
+    hit_any = t >= 0
+    mine[hit_any] = own(t[hit_any], rows[hit_any])
+    nearer = hit_any & ~mine & (z < slack[:, None])
+    seen = inside & ~nearer.all(axis=1)         # covered all around by nearer surfaces: hidden
+    doubt = np.flatnonzero(seen & nearer.any(axis=1))
+    if len(doubt) == 0:
+        return seen
+    cand = t[doubt]
+    ring = neighbours[np.maximum(cand, 0)].reshape(len(doubt), -1)
+    ring[np.repeat(cand < 0, neighbours.shape[1], axis=1)] = -1
+    cand = np.sort(np.concatenate([cand, ring], axis=1), axis=1)
+    cand[:, 1:][cand[:, 1:] == cand[:, :-1]] = -1
+    r, k = np.nonzero(cand >= 0)
+    tris, r = cand[r, k], doubt[r]
+    keep = ~own(tris, r)
+    tris, r = tris[keep], r[keep]
+    # Moller-Trumbore on camera + s (point - camera): hidden if 0 < s < 1 - TOL_PX / focal_px
+    tri = vertices[faces[tris]]
+    d = points[r] - camera
+    e1, e2 = tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0]
+    pvec = _cross(d, e2)
+    det = np.einsum("ij,ij->i", e1, pvec)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        inv = 1.0 / det
+        tvec = camera - tri[:, 0]
+        u = np.einsum("ij,ij->i", tvec, pvec) * inv
+        qvec = _cross(tvec, e1)
+        v = np.einsum("ij,ij->i", d, qvec) * inv
+        s_hit = np.einsum("ij,ij->i", e2, qvec) * inv
+    hit = (np.abs(det) > 1e-15) & (u >= 0) & (v >= 0) & (u + v <= 1) & (s_hit > 0) \
+        & (s_hit < 1.0 - TOL_PX / focal_px)
+    seen[r[hit]] = False
+    return seen
+
+
+def face_normals(vertices: np.ndarray, faces: np.ndarray) -> np.ndarray:
+    v = vertices.astype(np.float64)[faces]
+    n = np.cross(v[:, 1] - v[:, 0], v[:, 2] - v[:, 0])
+    length = np.linalg.norm(n, axis=1, keepdims=True)
+    return np.divide(n, length, out=np.zeros_like(n), where=length > 0)
+
+
+def edges_with_faces(faces: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Unique edges (E, 2) and their first two faces (E, 2), -1 where an edge has one face."""
+    m = len(faces)
+    e = np.sort(faces[:, [0, 1, 1, 2, 2, 0]].reshape(-1, 2).astype(np.int64), axis=1)
+    f = np.repeat(np.arange(m), 3)
+    key = e[:, 0] * (int(faces.max()) + 1) + e[:, 1]
+    order = np.argsort(key, kind="stable")
+    key, e, f = key[order], e[order], f[order]
+    first = np.r_[True, key[1:] != key[:-1]]
+    starts = np.flatnonzero(first)
+    counts = np.diff(np.r_[starts, len(key)])
+    second = np.where(counts >= 2, f[np.minimum(starts + 1, len(f) - 1)], -1)
+    return e[starts], np.stack([f[starts], second], axis=1)
+
+
+def face_neighbours(edge_faces: np.ndarray, n_faces: int) -> np.ndarray:
+    """(n_faces, 3) faces sharing an edge with each face (-1 where none)."""
+    pairs = edge_faces[edge_faces[:, 1] >= 0]
+    both = np.concatenate([pairs, pairs[:, ::-1]])
+    both = both[np.argsort(both[:, 0], kind="stable")]
+    slot = np.arange(len(both)) - np.searchsorted(both[:, 0], both[:, 0])
+    out = np.full((n_faces, 3), -1, np.int64)
+    keep = slot < 3
+    out[both[keep, 0], slot[keep]] = both[keep, 1]
+    return out
+
+
+def closed_outwards(vertices: np.ndarray, faces: np.ndarray, edge_faces: np.ndarray) -> bool:
+    """Every edge between two faces that run it in opposite directions (closed, consistently
+    wound), and every connected part of positive volume (normals out)."""
+    if len(faces) == 0 or (edge_faces[:, 1] < 0).any() or 2 * len(edge_faces) != 3 * len(faces):
+        return False
+    directed = faces[:, [0, 1, 1, 2, 2, 0]].reshape(-1, 2).astype(np.int64)
+    if len(np.unique(directed[:, 0] * (int(faces.max()) + 1) + directed[:, 1])) != len(directed):
+        return False
+    from scipy.sparse import coo_matrix
+    from scipy.sparse.csgraph import connected_components
+    m = len(faces)
+    graph = coo_matrix((np.ones(len(edge_faces)), (edge_faces[:, 0], edge_faces[:, 1])), (m, m))
+    _, part = connected_components(graph, directed=False)
+    v = vertices[faces]
+    volume = np.einsum("ij,ij->i", v[:, 0], np.cross(v[:, 1], v[:, 2]))
+    return bool((np.bincount(part, weights=volume) > 0).all())
+
+
+class ShapeBuffers:
+    """One shape's depth buffers for every camera, and what they answer."""
+
+    def __init__(self, vertices: np.ndarray, faces: np.ndarray, cameras: np.ndarray,
+                 locations: np.ndarray, size: int, focal_px: float):
+        self.vertices = np.asarray(vertices, np.float64)
+        self.faces = np.asarray(faces, np.int64)
+        self.cameras, self.locations = cameras, locations
+        self.size, self.focal_px = size, focal_px
+        self.edges, self.edge_faces = edges_with_faces(self.faces)
+        self.neighbours = face_neighbours(self.edge_faces, len(self.faces))
+        self.normals = face_normals(self.vertices, self.faces)
+        self.centres = self.vertices[self.faces].mean(axis=1)
+        # a closed surface turned outwards is only ever seen from its front faces: the back
+        # faces can be left out of the buffers (half the work), which stay the same
+        self.culled = cull = closed_outwards(self.vertices, self.faces, self.edge_faces)
+        pix, depth = project(cameras, self.vertices)
+        self.buffers = []
+        for v in range(len(cameras)):
+            keep = self.facing(v) if cull else np.arange(len(self.faces))
+            zbuf, local = rasterise(pix[v], depth[v], self.faces[keep], size)
+            self.buffers.append(pad(zbuf, np.where(local >= 0, keep[local], -1)))
+
+    def facing(self, v: int) -> np.ndarray:
+        """Indices of the faces turned towards camera v."""
+        return np.flatnonzero(np.einsum("ij,ij->i", self.normals,
+                                        self.locations[v] - self.centres) > 0)
+
+    def points_visible(self, points: np.ndarray, own_face: np.ndarray | None = None,
+                       vertex_ids: np.ndarray | None = None, views=None) -> np.ndarray:
+        """(V, n) bool for surface points lying on `own_face` (seeds) or for mesh vertices
+        (`vertex_ids`: their indices, so the triangles using them count as their own)."""
+        views = range(len(self.cameras)) if views is None else views
+        points = np.asarray(points, np.float64).reshape(-1, 3)
+        if own_face is not None:
+            own_face = np.asarray(own_face)
+
+            def own(t, idx):
+                return t == own_face[idx]
+        else:
+            faces = self.faces
+
+            def own(t, idx):
+                return (faces[t] == vertex_ids[idx][:, None]).any(axis=1)
+        out = np.zeros((len(views), len(points)), bool)
+        for k, v in enumerate(views):
+            pix, depth = project(self.cameras[v:v + 1], points)
+            out[k] = ray_visible(*self.buffers[v], pix[0], points, depth[0], own,
+                                 self.locations[v], self.vertices, self.faces, self.neighbours,
+                                 self.focal_px)
+        return out
+
+    def lines(self, crease_angle_deg: float) -> np.ndarray:
+        """(V, size, size) float32 ink: visible silhouettes, borders and creases, 1 px wide."""
+        edges, ef = self.edges, self.edge_faces
+        normals = self.normals
+        border = ef[:, 1] < 0
+        f1 = np.where(border, ef[:, 0], ef[:, 1])
+        cos = np.einsum("ij,ij->i", normals[ef[:, 0]], normals[f1])
+        crease = ~border & (cos < np.cos(np.radians(180.0 - crease_angle_deg)))
+        centres = self.centres
+        images = np.zeros((len(self.cameras), self.size, self.size), np.float32)
+        for v, loc in enumerate(self.locations):
+            facing = np.einsum("ij,ij->i", normals, loc - centres) > 0
+            silhouette = ~border & (facing[ef[:, 0]] != facing[f1])
+            pick = border | crease | silhouette
+            if self.culled:             # a closed surface's edges between back faces are hidden
+                pick &= facing[ef[:, 0]] | facing[f1]
+            images[v] = self._draw_edges(v, edges[pick], ef[pick])
+        return images
+
+    def _draw_edges(self, v: int, edges: np.ndarray, edge_faces: np.ndarray) -> np.ndarray:
+        img = np.zeros((self.size, self.size), np.float32)
+        if len(edges) == 0:
+            return img
+        cam = self.cameras[v:v + 1]
+        a, b = self.vertices[edges[:, 0]], self.vertices[edges[:, 1]]
+        pa, _ = project(cam, a)
+        pb, _ = project(cam, b)
+        length = np.linalg.norm(pa[0] - pb[0], axis=1)
+        n = np.where(np.isfinite(length), np.ceil(length / STEP_PX), 1).astype(np.int64) + 1
+        ids = np.repeat(np.arange(len(edges)), n)
+        local = np.arange(len(ids)) - np.repeat(np.cumsum(n) - n, n)
+        t = (local / (n[ids] - 1))[:, None]
+        points = a[ids] + t * (b[ids] - a[ids])
+        pix, depth = project(cam, points)
+
+        f0, f1 = edge_faces[ids, 0][:, None], edge_faces[ids, 1][:, None]
+        seen = seen_in_buffer(*self.buffers[v], pix[0], depth[0],
+                              lambda t: (t == f0) | (t == f1), self.focal_px)
+        cols = np.floor(pix[0][seen, 0]).astype(np.int64)
+        rows = np.floor(pix[0][seen, 1]).astype(np.int64)
+        img[rows, cols] = 1.0
+        return img
