@@ -1,17 +1,20 @@
-"""Operators that put the last analysis to use: select the shapes closest in style to the active
-one, and select the shapes worth labelling next. Both read the style space the analysis stored
-in the scene (`space_store`), so they work after save and reload without re-drawing; they change
-only the selection and the lists the Results panel shows (scene custom properties)."""
+"""Operators that put the analysis to use: select the shapes closest in style to the active one,
+select the shapes worth labelling next, and identify each shape's style from labelled 2D
+drawings. The first two read the style space the analysis stored in the scene (`space_store`),
+so they work after save and reload without re-drawing; they change only the selection and the
+lists the Results panel shows (scene custom properties). Identify runs its own analysis of the
+Analyse panel's target meshes and writes only `style_identified` on them."""
 import json
 
 import bpy
-from bpy.props import IntProperty
+from bpy.props import IntProperty, StringProperty
 
 from ..style_coanalysis.blender import space_store, writeback
 from ..style_coanalysis.suggest import suggest
 
 SIMILAR_KEY = "style_similar"       # {"query": name, "ranked": [[name, distance, cluster], ...]}
 SUGGESTED_KEY = "style_suggested"   # [[name, reason], ...]
+IDENTIFIED_KEY = "style_identified"  # [[name, style, votes], ...]
 
 
 def _space(cls, context):
@@ -117,4 +120,59 @@ class STYLE_OT_suggest_labels(bpy.types.Operator):
         return {"FINISHED"}
 
 
-CLASSES = (STYLE_OT_select_similar, STYLE_OT_suggest_labels)
+class STYLE_OT_identify_from_drawings(bpy.types.Operator):
+    """Predict each target mesh's style from a folder of labelled line drawings (one subfolder
+    per style, PNG or JPEG). Runs the analysis first: the interface waits until it is done"""
+
+    bl_idname = "style.identify_from_drawings"
+    bl_label = "Identify Style from Drawings"
+    bl_options = {"REGISTER", "UNDO"}
+
+    directory: StringProperty(name="Drawings", subtype="DIR_PATH",
+                              description="Folder with one subfolder of drawings per style")
+
+    @classmethod
+    def poll(cls, context):
+        from .analyse import target_names
+        if context.mode != "OBJECT":
+            cls.poll_message_set("Switch to Object Mode")
+            return False
+        if len(target_names(context)) < 2:
+            cls.poll_message_set("Select at least two meshes (or choose a collection) in Analyse")
+            return False
+        return True
+
+    def invoke(self, context, event):
+        context.window_manager.fileselect_add(self)
+        return {"RUNNING_MODAL"}
+
+    def execute(self, context):
+        from ..style_coanalysis import identify as ident
+        from ..style_coanalysis.blender.cmd_identify import identify_job
+        from ..style_coanalysis.meshes import InputError
+        from .analyse import build_job
+        try:
+            drawings = ident.load_drawings(bpy.path.abspath(self.directory))  # checked first
+            meshes, options, warnings, _ = build_job(context)
+            job, found = identify_job(meshes, options, drawings)
+        except InputError as exc:
+            self.report({"ERROR"}, str(exc))
+            return {"CANCELLED"}
+        for w in warnings:
+            self.report({"WARNING"}, w)
+        rows = []
+        for shape, r in zip(job.shapes, found):
+            obj = context.scene.objects[shape.name]
+            obj["style_identified"] = r.style
+            obj["style_identified_votes"] = json.dumps(r.votes)
+            rows.append([shape.name, r.style, r.votes[r.style]])
+        context.scene[IDENTIFIED_KEY] = json.dumps(rows)
+        counts = {}
+        for _, style, _ in rows:
+            counts[style] = counts.get(style, 0) + 1
+        self.report({"INFO"}, f"{len(rows)} shapes identified: "
+                    + ", ".join(f"{s} {n}" for s, n in sorted(counts.items())))
+        return {"FINISHED"}
+
+
+CLASSES = (STYLE_OT_select_similar, STYLE_OT_suggest_labels, STYLE_OT_identify_from_drawings)

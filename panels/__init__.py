@@ -162,11 +162,11 @@ class VIEW3D_PT_style_results(_StylePanel, bpy.types.Panel):
 
 class VIEW3D_PT_style_uses(_StylePanel, bpy.types.Panel):
     """Find shapes of the same style and what to label next (inside Results)."""
-    bl_label = "Similar Style and What to Label"
+    bl_label = "Use the Style"
     bl_parent_id = "VIEW3D_PT_style_results"
 
     def draw(self, context):
-        from ..operators.uses import SIMILAR_KEY, SUGGESTED_KEY, read_list
+        from ..operators.uses import IDENTIFIED_KEY, SIMILAR_KEY, SUGGESTED_KEY, read_list
         from ..style_coanalysis.blender.writeback import has_results
         layout = self.layout
         layout.operator("style.select_similar", icon="RESTRICT_SELECT_OFF")
@@ -183,6 +183,12 @@ class VIEW3D_PT_style_uses(_StylePanel, bpy.types.Panel):
             for k, (name, reason) in enumerate(suggested, start=1):
                 box.label(text=f"{k}. {name}")
                 box.label(text=f"    {reason}")
+        layout.operator("style.identify_from_drawings", icon="FILE_IMAGE")
+        identified = read_list(context.scene, IDENTIFIED_KEY)
+        if identified:
+            box = layout.box()
+            for name, style, votes in identified:
+                box.label(text=f"{name}: {style} ({votes} of the views)")
 
 
 class VIEW3D_PT_style_decimate(_StylePanel, bpy.types.Panel):

@@ -73,6 +73,14 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--n", type=int, default=5, help="how many shapes to suggest (default 5)")
     p.add_argument("--out", help="CSV to write (default: standard output); name,style rows with "
                    "the style left empty for you to fill in, then pass it to analyze --labels")
+
+    p = sub.add_parser("identify", help="the style of each shape from labelled 2D line drawings")
+    p.add_argument("input", help="a .blend file or a folder of mesh files (OBJ, PLY, STL, glTF)")
+    p.add_argument("--drawings", required=True, help="folder with one subfolder of drawings per "
+                   "style (PNG or JPEG, any size, dark lines on light or light on dark)")
+    p.add_argument("--out", required=True, help="folder for identify.csv and identify.json")
+    _add_drawing_options(p)
+    p.add_argument("--seed", type=int, default=0, help="every random choice (default 0)")
     return parser
 
 

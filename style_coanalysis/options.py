@@ -40,7 +40,7 @@ METHOD_HELP = ("'default' (this extension's method, see README) or 'paper' (sect
 
 # What `analyze` writes into --out; a folder holding anything else is not ours to replace.
 RESULT_ENTRIES = ("result.blend", "result.blend1", "report.json", "report.html", "images",
-                  "style_space.npz")
+                  "style_space.npz", "identify.csv", "identify.json")
 
 
 def default(option: str):

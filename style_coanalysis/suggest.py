@@ -3,11 +3,14 @@
 Why this order. In label mode the analysis has one cluster per style named by the labels, so a
 style nobody labelled cannot appear at all: the first picks cover the clusters that hold no
 label yet, each by its most typical member (its medoid in the style space), largest cluster
-first. Then the labels go where the analysis is unsure (low confidence) among shapes that are
-typical of many others (high local density, so one label speaks for a neighbourhood and not for
-an outlier), each pick spread away from the labelled shapes and from the earlier picks (a label
-next to a known one says little new). Measured against random picks by
-`bench/bench_suggest.py`.
+first. Once every cluster holds a label (in label mode the clusters are the labelled styles, so
+a style nobody labelled hides inside another cluster) the picks go farthest from everything
+labelled or picked so far (greedy k-centre: a label next to a known one says little new, a far
+one may be a style not seen yet), weighted by local density (one label should speak for a
+neighbourhood, not for an outlier) and, less, by the analysis' uncertainty. A first version
+without the k-centre term (uncertainty x density x distance capped at the median) was worse than
+random picks on a voxel subset (hu2017-60-0, seed 0: 0.40 / 0.40 / 0.33 purity at 3 / 6 / 12
+labels, random 0.38 / 0.57 / 0.53). Measured against random picks by `bench/bench_suggest.py`.
 """
 from __future__ import annotations
 
@@ -70,20 +73,20 @@ def suggest(space: StyleSpace, n: int, labelled=None) -> list[Suggestion]:
                                 f"cluster {int(c)} ({len(members)} shapes) has no label yet: "
                                 "its most typical shape"))
 
-    # 2. uncertain and typical, away from what is known
+    # 2. far from what is known, typical, and (less) uncertain
     while len(picks) < n and not taken.all():
         cand = np.flatnonzero(~taken)
         known = np.flatnonzero(taken)
-        spread = (np.clip(D[np.ix_(cand, known)].min(axis=1) / scale, 0, 1) if len(known)
+        spread = (D[np.ix_(cand, known)].min(axis=1) / scale if len(known)
                   else np.ones(len(cand)))
-        unsure = 1.0 - space.confidence[cand]
-        score = unsure * dens[cand] * spread
+        unsure = 1.0 - np.clip(space.confidence[cand], 0, 1)
+        score = spread * dens[cand] * (1.0 + unsure)
         k = int(np.argmax(score))
         i = int(cand[k])
         taken[i] = True
         picks.append(Suggestion(space.names[i], int(space.clusters[i]),
                                 float(space.confidence[i]), float(score[k]),
-                                f"the analysis is unsure (confidence {space.confidence[i]:.2f}) "
-                                f"of a typical shape (density {dens[i]:.2f}) far from the "
-                                f"labelled ones (spread {spread[k]:.2f})"))
+                                f"far from every labelled shape ({spread[k]:.2f} x the median "
+                                f"distance), typical of its neighbours (density {dens[i]:.2f}), "
+                                f"confidence {space.confidence[i]:.2f}"))
     return picks

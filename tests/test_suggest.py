@@ -41,7 +41,7 @@ def test_never_suggests_labelled_shapes_and_no_repeats():
     names = [p.name for p in picks]
     assert len(names) == 10 and len(set(names)) == 10
     assert not set(names) & {space.names[i] for i in np.flatnonzero(labelled)}
-    assert all("unsure" in p.reason for p in picks[2:])
+    assert all("far from every labelled shape" in p.reason for p in picks[2:])
 
 
 def test_asks_for_everything_left_at_most():

@@ -5,6 +5,7 @@ import subprocess
 import sys
 from pathlib import Path
 
+import numpy as np
 import pytest
 
 from style_coanalysis.constraints import read_labels_csv
@@ -24,11 +25,17 @@ def run_cmd(*args, timeout=900):
 
 
 @pytest.fixture(scope="module")
-def result(tmp_path_factory):
-    """An analysed 12-shape sample: (result folder, its style space)."""
+def base(tmp_path_factory):
+    """A 12-shape sample in base/sample; base/cache its drawings."""
     base = tmp_path_factory.mktemp("uses")
     res = run_cmd("sample", "--out", base / "sample", "--size", 12, "--seed", 5)
     assert res.returncode == 0, res.stderr[-3000:]
+    return base
+
+
+@pytest.fixture(scope="module")
+def result(base):
+    """The sample analysed: (result folder, its style space)."""
     out = base / "result"
     res = run_cmd("analyze", base / "sample" / "sample.blend", "--out", out, "--renderer",
                   "lineart", "--jobs", 2, "--cache", base / "cache", "--rounds", 2)
@@ -150,3 +157,77 @@ def test_buttons_on_the_saved_result(result, ext, tmp_path):
     assert bpy.ops.style.clear_results() == {"FINISHED"}
     assert not bpy.ops.style.select_similar.poll()
     assert not bpy.ops.style.suggest_labels.poll()
+
+
+def synthetic_drawings(folder, invert_second=True):
+    """Two 'styles' of plain line drawings: curvy (circles) and straight (boxes), 3 each, of
+    different sizes; the straight ones light on dark."""
+    from PIL import Image
+    from skimage.draw import circle_perimeter, rectangle_perimeter
+    for k in range(3):
+        size = 150 + 50 * k
+        for style in ("curvy", "straight"):
+            img = np.zeros((size, size), np.uint8)
+            if style == "curvy":
+                for r in (size // 3, size // 5, size // 9):
+                    rr, cc = circle_perimeter(size // 2, size // 2, r, shape=img.shape)
+                    img[rr, cc] = 255
+            else:
+                for d in (size // 8, size // 4, size // 3):
+                    rr, cc = rectangle_perimeter((d, d), (size - d, size - d), shape=img.shape)
+                    img[rr, cc] = 255
+            (folder / style).mkdir(parents=True, exist_ok=True)
+            out = img if (style == "straight" and invert_second) else 255 - img
+            Image.fromarray(out).save(folder / style / f"{k}.png")
+    return folder
+
+
+def test_identify_command(base, tmp_path):
+    import csv
+    drawings = synthetic_drawings(tmp_path / "drawings")
+    out = tmp_path / "identified"
+    res = run_cmd("identify", base / "sample" / "sample.blend", "--drawings", drawings, "--out",
+                  out, "--renderer", "lineart", "--jobs", 2, "--cache", base / "cache")
+    assert res.returncode == 0, res.stderr[-3000:]
+    rows = list(csv.DictReader((out / "identify.csv").open()))
+    assert len(rows) == 12
+    for r in rows:
+        assert r["style"] in ("curvy", "straight")
+        votes = {"curvy": int(r["votes_curvy"]), "straight": int(r["votes_straight"])}
+        assert sum(votes.values()) == 12 and votes[r["style"]] == max(votes.values())
+
+
+def test_identify_refuses_a_bad_drawing_before_rendering(base, tmp_path):
+    drawings = synthetic_drawings(tmp_path / "drawings")
+    (drawings / "curvy" / "broken.png").write_bytes(b"not a png")
+    out = tmp_path / "identified"
+    res = run_cmd("identify", base / "sample" / "sample.blend", "--drawings", drawings, "--out",
+                  out, "--renderer", "lineart", "--cache", tmp_path / "cache")
+    assert res.returncode == 2 and "broken.png' is not a readable image" in res.stderr
+    assert not out.exists() and not (tmp_path / "cache").exists()    # nothing drawn or written
+
+
+def test_identify_button(base, ext, tmp_path):
+    import json
+    drawings = synthetic_drawings(tmp_path / "drawings")
+    bpy.ops.wm.open_mainfile(filepath=str(base / "sample" / "sample.blend"))
+    scene = bpy.context.scene
+    scene.style_coanalysis.renderer = "lineart"
+    scene.style_coanalysis.max_rounds = 2
+    meshes = [o for o in scene.objects if o.type == "MESH"]
+    for o in scene.objects:
+        o.select_set(o.type == "MESH")
+
+    (drawings / "curvy" / "broken.jpg").write_bytes(b"no jpeg")
+    with pytest.raises(RuntimeError, match="broken.jpg' is not a readable image"):
+        bpy.ops.style.identify_from_drawings(directory=str(drawings))
+    assert not any("style_identified" in o for o in meshes)           # nothing written
+    (drawings / "curvy" / "broken.jpg").unlink()
+
+    assert bpy.ops.style.identify_from_drawings(directory=str(drawings)) == {"FINISHED"}
+    for o in meshes:
+        votes = json.loads(o["style_identified_votes"])
+        assert o["style_identified"] in ("curvy", "straight")
+        assert sum(votes.values()) == 12 and votes[o["style_identified"]] == max(votes.values())
+    from style_coanalysis_ext.operators.uses import IDENTIFIED_KEY, read_list
+    assert sorted(r[0] for r in read_list(scene, IDENTIFIED_KEY)) == sorted(o.name for o in meshes)
