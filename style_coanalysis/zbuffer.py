@@ -22,6 +22,8 @@ buffer's triangles as the candidate occluders (`ray_visible`).
 from __future__ import annotations
 
 import numpy as np
+from scipy.sparse import coo_matrix
+from scipy.sparse.csgraph import connected_components
 
 from .rig import project
 
@@ -55,33 +57,46 @@ def rasterise(pixels: np.ndarray, depth: np.ndarray, faces: np.ndarray, size: in
     """
     zbuf = np.full(size * size, np.inf)
     tri_id = np.full(size * size, -1, np.int64)
-    tri = pixels[faces].astype(np.float64)                      # (M, 3, 2)
-    inv = 1.0 / depth[faces]                                    # (M, 3)
-    a, b, c = tri[:, 0], tri[:, 1], tri[:, 2]
-    area = (b[:, 0] - a[:, 0]) * (c[:, 1] - a[:, 1]) - (b[:, 1] - a[:, 1]) * (c[:, 0] - a[:, 0])
-    ok = (np.abs(area) > 1e-12) & (depth[faces] > 0).all(axis=1) & np.isfinite(tri).all(axis=(1, 2))
+    x, y = pixels[:, 0].astype(np.float64), pixels[:, 1].astype(np.float64)
+    corners = [np.ascontiguousarray(faces[:, k]) for k in range(3)]
+    xs, ys, ds = ([a[f] for f in corners] for a in (x, y, depth))     # per corner, 1-D columns
+    # only the triangles whose box holds a pixel centre (fine meshes: many hold none)
+    _, n_rows = _spans(np.minimum(np.minimum(*ys[:2]), ys[2]), np.maximum(np.maximum(*ys[:2]), ys[2]),
+                       size)
+    _, n_cols = _spans(np.minimum(np.minimum(*xs[:2]), xs[2]), np.maximum(np.maximum(*xs[:2]), xs[2]),
+                       size)
+    with np.errstate(invalid="ignore"):
+        keep = np.flatnonzero((n_rows > 0) & (n_cols > 0) & (ds[0] > 0) & (ds[1] > 0) & (ds[2] > 0))
+    xs, ys = [a[keep] for a in xs], [a[keep] for a in ys]
+    inv = [1.0 / a[keep] for a in ds]
+    # corners by height: a row's span runs from the long edge (top to bottom) to the top-middle
+    # edge above the middle corner, and to the middle-bottom edge below it
+    y0, y1, y2 = ys
+    top = np.where((y0 <= y1) & (y0 <= y2), 0, np.where(y1 <= y2, 1, 2))
+    bot = np.where((y2 >= y1) & (y2 >= y0), 2, np.where(y1 >= y0, 1, 0))
+    mid = 3 - top - bot
+    tx, ty, mx, my, bx, by = (np.choose(top, xs), np.choose(top, ys), np.choose(mid, xs),
+                              np.choose(mid, ys), np.choose(bot, xs), np.choose(bot, ys))
+
+    def slope(x0, y0, x1, y1):
+        dy = y1 - y0
+        return np.divide(x1 - x0, dy, out=np.zeros_like(dy), where=dy != 0)
+    edges = np.stack([tx, ty, mx, my, slope(tx, ty, bx, by), slope(tx, ty, mx, my),
+                      slope(mx, my, bx, by)], axis=1)
+    row0, n_rows = _spans(ty, by, size)
     # 1/depth = plane . (x, y, 1) across each triangle (perspective-correct interpolation):
     # the plane through the points (x, y, 1/depth) of its corners
-    pts = np.concatenate([tri, inv[..., None]], axis=2)
-    normal = np.cross(pts[:, 1] - pts[:, 0], pts[:, 2] - pts[:, 0])
-    with np.errstate(divide="ignore", invalid="ignore"):
-        plane = np.stack([-normal[:, 0], -normal[:, 1], np.einsum("ij,ij->i", normal, pts[:, 0])],
-                         axis=1) / normal[:, 2:3]
-    # corners by height: a row's span runs from the long edge (top to bottom) to the top-middle
-    # edge above the middle corner, to the middle-bottom edge below it
-    by_y = np.take_along_axis(tri, np.argsort(tri[:, :, 1], axis=1)[..., None], axis=1)
-    top, mid, bot = by_y[:, 0], by_y[:, 1], by_y[:, 2]
-    with np.errstate(divide="ignore", invalid="ignore"):
-        slopes = [(q[:, 0] - p[:, 0]) / (q[:, 1] - p[:, 1]) for p, q in
-                  ((top, bot), (top, mid), (mid, bot))]
-    edges = np.nan_to_num(np.stack([top[:, 0], top[:, 1], mid[:, 0], mid[:, 1], *slopes], axis=1),
-                          nan=0.0, posinf=0.0, neginf=0.0)
-    row0, n_rows = _spans(top[:, 1], bot[:, 1], size)
-    n_rows[~ok] = 0
+    ux, uy, uz = xs[1] - xs[0], ys[1] - ys[0], inv[1] - inv[0]
+    vx, vy, vz = xs[2] - xs[0], ys[2] - ys[0], inv[2] - inv[0]
+    nx, ny, nz = uy * vz - uz * vy, uz * vx - ux * vz, ux * vy - uy * vx
+    flat = ~(np.abs(nz) > 1e-12)                                 # degenerate in the image, or NaN
+    n_rows[flat] = 0
+    nz = np.where(flat, 1.0, nz)
+    plane = np.stack([-nx / nz, -ny / nz, (nx * xs[0] + ny * ys[0]) / nz + inv[0]], axis=1)
     # chunks of triangles with at most MAX_PAIRS rows between them (memory bound)
     ends = np.cumsum(n_rows)
     start = 0
-    while start < len(faces):
+    while start < len(keep):
         base = ends[start - 1] if start else 0
         stop = max(start + 1, int(np.searchsorted(ends, base + MAX_PAIRS, side="right")))
         t, k = _expand(n_rows[start:stop])
@@ -99,7 +114,7 @@ def rasterise(pixels: np.ndarray, depth: np.ndarray, faces: np.ndarray, size: in
         pix = row * size + col
         np.minimum.at(zbuf, pix, z)
         won = z <= zbuf[pix]                # the nearest at its pixel (ties: the last)
-        tri_id[pix[won]] = ids[won]
+        tri_id[pix[won]] = keep[ids[won]]
         start = stop
     return zbuf.reshape(size, size), tri_id.reshape(size, size)
 
@@ -149,8 +164,8 @@ def ray_visible(zbuf: np.ndarray, tri_id: np.ndarray, pixels: np.ndarray, points
     The buffer proposes the occluders: the triangles nearest the camera at the 4 pixel centres
     around the point's projection, and their edge neighbours (the surface along the exact ray
     may be a neighbour's). A point is hidden when the segment from the camera to it crosses
-    one of them that it does not lie on (`own(tri_ids, rows) -> bool`) short of the point by
-    more than `TOL_PX` pixels' worth of depth. Only points with a nearer surface in some but
+    one of them short of the point by more than `TOL_PX` pixels' worth of depth. The triangles
+    it lies on (`own(tri_ids, rows) -> bool`) are not occluders when screening the window. Only points with a nearer surface in some but
     not all of the window's pixels are tested exactly: with none they are seen, with nearer
     surfaces all around they are hidden.
     """
@@ -173,9 +188,8 @@ def ray_visible(zbuf: np.ndarray, tri_id: np.ndarray, pixels: np.ndarray, points
     cand[:, 1:][cand[:, 1:] == cand[:, :-1]] = -1
     r, k = np.nonzero(cand >= 0)
     tris, r = cand[r, k], doubt[r]
-    keep = ~own(tris, r)
-    tris, r = tris[keep], r[keep]
-    # Moller-Trumbore on camera + s (point - camera): hidden if 0 < s < 1 - TOL_PX / focal_px
+    # Moller-Trumbore (a triangle the point lies on is crossed at the point itself, s = 1,
+    # so it never counts) on camera + s (point - camera): hidden if 0 < s < 1 - TOL_PX / focal_px
     tri = vertices[faces[tris]]
     d = points[r] - camera
     e1, e2 = tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0]
@@ -228,22 +242,35 @@ def face_neighbours(edge_faces: np.ndarray, n_faces: int) -> np.ndarray:
     return out
 
 
-def closed_outwards(vertices: np.ndarray, faces: np.ndarray, edge_faces: np.ndarray) -> bool:
-    """Every edge between two faces that run it in opposite directions (closed, consistently
-    wound), and every connected part of positive volume (normals out)."""
-    if len(faces) == 0 or (edge_faces[:, 1] < 0).any() or 2 * len(edge_faces) != 3 * len(faces):
-        return False
-    directed = faces[:, [0, 1, 1, 2, 2, 0]].reshape(-1, 2).astype(np.int64)
-    if len(np.unique(directed[:, 0] * (int(faces.max()) + 1) + directed[:, 1])) != len(directed):
-        return False
-    from scipy.sparse import coo_matrix
-    from scipy.sparse.csgraph import connected_components
+def closed_outwards(vertices: np.ndarray, faces: np.ndarray) -> np.ndarray:
+    """(M,) bool per face: does it belong to a closed part turned outwards? A part (faces joined
+    by edges) is closed when each of its edges has exactly two faces running it in opposite
+    directions, and turned outwards when its volume is positive. From outside such a part
+    only its front faces can be seen."""
     m = len(faces)
-    graph = coo_matrix((np.ones(len(edge_faces)), (edge_faces[:, 0], edge_faces[:, 1])), (m, m))
-    _, part = connected_components(graph, directed=False)
-    v = vertices[faces]
+    if m == 0:
+        return np.zeros(0, bool)
+    directed = faces[:, [0, 1, 1, 2, 2, 0]].reshape(-1, 2).astype(np.int64)
+    face_of = np.repeat(np.arange(m), 3)
+    n = int(faces.max()) + 1
+    undirected = np.sort(directed, axis=1)
+    _, edge_of, count = np.unique(undirected[:, 0] * n + undirected[:, 1], return_inverse=True,
+                                  return_counts=True)
+    _, run_of, runs = np.unique(directed[:, 0] * n + directed[:, 1], return_inverse=True,
+                                return_counts=True)
+    bad_edge = (count[edge_of] != 2) | (runs[run_of] != 1)
+    # parts: faces joined through edges with two faces
+    order = np.argsort(edge_of, kind="stable")
+    pairs = order[count[edge_of[order]] == 2].reshape(-1, 2)
+    first, second = pairs[:, 0], pairs[:, 1]
+    graph = coo_matrix((np.ones(len(first)), (face_of[first], face_of[second])), (m, m))
+    n_parts, part = connected_components(graph, directed=False)
+    open_part = np.zeros(n_parts, bool)
+    open_part[part[face_of[bad_edge]]] = True
+    v = vertices.astype(np.float64)[faces]
     volume = np.einsum("ij,ij->i", v[:, 0], np.cross(v[:, 1], v[:, 2]))
-    return bool((np.bincount(part, weights=volume) > 0).all())
+    inward = np.bincount(part, weights=volume, minlength=n_parts) <= 0
+    return ~(open_part | inward)[part]
 
 
 class ShapeBuffers:
@@ -261,18 +288,17 @@ class ShapeBuffers:
         self.centres = self.vertices[self.faces].mean(axis=1)
         # a closed surface turned outwards is only ever seen from its front faces: the back
         # faces can be left out of the buffers (half the work), which stay the same
-        self.culled = cull = closed_outwards(self.vertices, self.faces, self.edge_faces)
+        self.closed = closed_outwards(self.vertices, self.faces)
         pix, depth = project(cameras, self.vertices)
         self.buffers = []
         for v in range(len(cameras)):
-            keep = self.facing(v) if cull else np.arange(len(self.faces))
+            keep = np.flatnonzero(self.facing_mask(v) | ~self.closed)
             zbuf, local = rasterise(pix[v], depth[v], self.faces[keep], size)
             self.buffers.append(pad(zbuf, np.where(local >= 0, keep[local], -1)))
 
-    def facing(self, v: int) -> np.ndarray:
-        """Indices of the faces turned towards camera v."""
-        return np.flatnonzero(np.einsum("ij,ij->i", self.normals,
-                                        self.locations[v] - self.centres) > 0)
+    def facing_mask(self, v: int) -> np.ndarray:
+        """(M,) bool: is each face turned towards camera v?"""
+        return np.einsum("ij,ij->i", self.normals, self.locations[v] - self.centres) > 0
 
     def points_visible(self, points: np.ndarray, own_face: np.ndarray | None = None,
                        vertex_ids: np.ndarray | None = None, views=None) -> np.ndarray:
@@ -306,14 +332,13 @@ class ShapeBuffers:
         f1 = np.where(border, ef[:, 0], ef[:, 1])
         cos = np.einsum("ij,ij->i", normals[ef[:, 0]], normals[f1])
         crease = ~border & (cos < np.cos(np.radians(180.0 - crease_angle_deg)))
-        centres = self.centres
         images = np.zeros((len(self.cameras), self.size, self.size), np.float32)
-        for v, loc in enumerate(self.locations):
-            facing = np.einsum("ij,ij->i", normals, loc - centres) > 0
+        for v in range(len(self.cameras)):
+            facing = self.facing_mask(v)
             silhouette = ~border & (facing[ef[:, 0]] != facing[f1])
             pick = border | crease | silhouette
-            if self.culled:             # a closed surface's edges between back faces are hidden
-                pick &= facing[ef[:, 0]] | facing[f1]
+            # on a closed part, edges between back faces are hidden
+            pick &= facing[ef[:, 0]] | facing[f1] | ~self.closed[ef[:, 0]]
             images[v] = self._draw_edges(v, edges[pick], ef[pick])
         return images
 
@@ -321,22 +346,23 @@ class ShapeBuffers:
         img = np.zeros((self.size, self.size), np.float32)
         if len(edges) == 0:
             return img
-        cam = self.cameras[v:v + 1]
-        a, b = self.vertices[edges[:, 0]], self.vertices[edges[:, 1]]
-        pa, _ = project(cam, a)
-        pb, _ = project(cam, b)
-        length = np.linalg.norm(pa[0] - pb[0], axis=1)
+        cam = self.cameras[v]
+        # projection is linear in homogeneous coordinates: interpolate there
+        ha = np.c_[self.vertices[edges[:, 0]], np.ones(len(edges))] @ cam.T      # (E, 3)
+        hb = np.c_[self.vertices[edges[:, 1]], np.ones(len(edges))] @ cam.T
+        with np.errstate(divide="ignore", invalid="ignore"):
+            length = np.linalg.norm(ha[:, :2] / ha[:, 2:] - hb[:, :2] / hb[:, 2:], axis=1)
         n = np.where(np.isfinite(length), np.ceil(length / STEP_PX), 1).astype(np.int64) + 1
-        ids = np.repeat(np.arange(len(edges)), n)
-        local = np.arange(len(ids)) - np.repeat(np.cumsum(n) - n, n)
+        ids, local = _expand(n)
         t = (local / (n[ids] - 1))[:, None]
-        points = a[ids] + t * (b[ids] - a[ids])
-        pix, depth = project(cam, points)
-
+        h = ha[ids] + t * (hb[ids] - ha[ids])
+        depth = h[:, 2]
+        with np.errstate(divide="ignore", invalid="ignore"):
+            pix = h[:, :2] / depth[:, None]
         f0, f1 = edge_faces[ids, 0][:, None], edge_faces[ids, 1][:, None]
-        seen = seen_in_buffer(*self.buffers[v], pix[0], depth[0],
+        seen = seen_in_buffer(*self.buffers[v], pix, depth,
                               lambda t: (t == f0) | (t == f1), self.focal_px)
-        cols = np.floor(pix[0][seen, 0]).astype(np.int64)
-        rows = np.floor(pix[0][seen, 1]).astype(np.int64)
+        cols = np.floor(pix[seen, 0]).astype(np.int64)
+        rows = np.floor(pix[seen, 1]).astype(np.int64)
         img[rows, cols] = 1.0
         return img
