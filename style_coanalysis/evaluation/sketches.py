@@ -4,6 +4,11 @@ No labelled sketches of these collections exist, so: line drawings of meshes the
 contain, from views its rig does not use (another elevation and azimuth spacing), made thicker,
 jittered by a smooth random warp and broken in places, at another size, and written half as
 dark-on-light PNG and half as light-on-dark JPEG. A stand-in, not real hand drawing.
+
+Strokes are 3 px at 320 px (about twice the views' lines). A first version drew 5 px strokes
+after a lenient resize threshold: the blobs filled in lattices and carvings that a person
+sketching the piece would draw, and identify reached 0.42 on sample-120 (seed 0; whole-image
+orientation statistics 0.32).
 """
 from __future__ import annotations
 
@@ -23,8 +28,8 @@ SKETCH_SETTINGS = DrawingSettings(renderer="lineart", n_views=5, elevation_deg=1
 
 def sketchify(ink: np.ndarray, rng: np.random.Generator, size: int = 320) -> np.ndarray:
     """(H, W) ink in [0, 1] -> (size, size) ink: thicker, jittered, partly broken strokes."""
-    img = resize(np.asarray(ink, np.float64), (size, size), order=1) > 0.1
-    img = dilation(img, disk(max(1, size // 160)))                   # thicker strokes
+    img = resize(np.asarray(ink, np.float64), (size, size), order=1) > 0.5
+    img = dilation(img, disk(max(1, size // 320)))                   # thicker strokes
     amp, smooth = size / 100.0, size / 20.0
     dy = gaussian_filter(rng.standard_normal((size, size)), smooth)
     dx = gaussian_filter(rng.standard_normal((size, size)), smooth)
