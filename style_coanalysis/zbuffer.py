@@ -156,8 +156,8 @@ def seen_in_buffer(zbuf: np.ndarray, tri_id: np.ndarray, pixels: np.ndarray, dep
 
 
 def ray_visible(zbuf: np.ndarray, tri_id: np.ndarray, pixels: np.ndarray, points: np.ndarray,
-                depth: np.ndarray, own, camera: np.ndarray, vertices: np.ndarray,
-                faces: np.ndarray, neighbours: np.ndarray, focal_px: float) -> np.ndarray:
+                depth: np.ndarray, own, camera: np.ndarray, triangles, neighbours: np.ndarray,
+                focal_px: float) -> np.ndarray:
     """(n,) bool for seeds and vertices: `render.ray_visibility`'s ray cast, vectorised, with
     the depth buffer in place of a BVH.
 
@@ -165,18 +165,19 @@ def ray_visible(zbuf: np.ndarray, tri_id: np.ndarray, pixels: np.ndarray, points
     around the point's projection, and their edge neighbours (the surface along the exact ray
     may be a neighbour's). A point is hidden when the segment from the camera to it crosses
     one of them short of the point by more than `TOL_PX` pixels' worth of depth. The triangles
-    it lies on (`own(tri_ids, rows) -> bool`) are not occluders when screening the window. Only points with a nearer surface in some but
+    it lies on (`own(tri_ids, rows) -> bool`) are not occluders when screening the window.
+    `triangles`: (first corner, first edge, second edge) per face, each (M, 3). Only points with a nearer surface in some but
     not all of the window's pixels are tested exactly: with none they are seen, with nearer
     surfaces all around they are hidden.
     """
     n = len(points)
+    corner, edge1, edge2 = triangles
     inside, z, t = _window(zbuf, tri_id, pixels)
     slack = depth * (1.0 - TOL_PX / focal_px)
-    rows = np.repeat(np.arange(n), 4).reshape(n, 4)
-    mine = np.zeros((n, 4), bool)
-    hit_any = t >= 0
-    mine[hit_any] = own(t[hit_any], rows[hit_any])
-    nearer = hit_any & ~mine & (z < slack[:, None])
+    nearer = (t >= 0) & (z < slack[:, None])
+    r, k = np.nonzero(nearer)
+    mine = own(t[r, k], r)
+    nearer[r[mine], k[mine]] = False
     seen = inside & ~nearer.all(axis=1)         # covered all around by nearer surfaces: hidden
     doubt = np.flatnonzero(seen & nearer.any(axis=1))
     if len(doubt) == 0:
@@ -190,14 +191,13 @@ def ray_visible(zbuf: np.ndarray, tri_id: np.ndarray, pixels: np.ndarray, points
     tris, r = cand[r, k], doubt[r]
     # Moller-Trumbore (a triangle the point lies on is crossed at the point itself, s = 1,
     # so it never counts) on camera + s (point - camera): hidden if 0 < s < 1 - TOL_PX / focal_px
-    tri = vertices[faces[tris]]
+    v0, e1, e2 = corner[tris], edge1[tris], edge2[tris]
     d = points[r] - camera
-    e1, e2 = tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0]
     pvec = _cross(d, e2)
     det = np.einsum("ij,ij->i", e1, pvec)
     with np.errstate(divide="ignore", invalid="ignore"):
         inv = 1.0 / det
-        tvec = camera - tri[:, 0]
+        tvec = camera - v0
         u = np.einsum("ij,ij->i", tvec, pvec) * inv
         qvec = _cross(tvec, e1)
         v = np.einsum("ij,ij->i", d, qvec) * inv
@@ -285,7 +285,9 @@ class ShapeBuffers:
         self.edges, self.edge_faces = edges_with_faces(self.faces)
         self.neighbours = face_neighbours(self.edge_faces, len(self.faces))
         self.normals = face_normals(self.vertices, self.faces)
-        self.centres = self.vertices[self.faces].mean(axis=1)
+        corners = self.vertices[self.faces]
+        self.centres = corners.mean(axis=1)
+        self.triangles = (corners[:, 0], corners[:, 1] - corners[:, 0], corners[:, 2] - corners[:, 0])
         # a closed surface turned outwards is only ever seen from its front faces: the back
         # faces can be left out of the buffers (half the work), which stay the same
         self.closed = closed_outwards(self.vertices, self.faces)
@@ -320,7 +322,7 @@ class ShapeBuffers:
         for k, v in enumerate(views):
             pix, depth = project(self.cameras[v:v + 1], points)
             out[k] = ray_visible(*self.buffers[v], pix[0], points, depth[0], own,
-                                 self.locations[v], self.vertices, self.faces, self.neighbours,
+                                 self.locations[v], self.triangles, self.neighbours,
                                  self.focal_px)
         return out
 
