@@ -10,9 +10,10 @@ the generic words. This dense matching extends the paper's seed patches to regio
 decimation application took three times as many seeds for the same purpose): every window
 position is a candidate, so regions are not limited to where 30 or 90 seeds happened to fall.
 
-A vertex's style weight is the share of the views that see it in which it lies inside a style
-window: 1 means "style-bearing from every side it can be seen", 0 "never". Best view: the view
-with the most style windows (ties: the larger summed similarity).
+Which surface the style windows mark is decided per face by `regions` (the windows' cover and
+the carved regions their strokes lie in); a vertex's weight, the `style_weight` group, is the
+area-weighted mean of its faces' weights. Best view: the view with the most style windows (ties:
+the larger summed similarity).
 """
 from __future__ import annotations
 
@@ -20,10 +21,11 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from . import regions
 from .drawings import ShapeDrawings
 from .encoding import word_assignments
 from .features import PIXELS_PER_CELL, hog_images
-from .rig import project
+from .meshes import face_areas
 
 MAX_BOXES_PER_VIEW = 12      # style windows kept per view for the report's boxes
 
@@ -31,6 +33,7 @@ MAX_BOXES_PER_VIEW = 12      # style windows kept per view for the report's boxe
 @dataclass
 class ShapeLocalisation:
     weights: np.ndarray          # (N,) float32 in [0, 1], per mesh vertex
+    face_weights: np.ndarray     # (M,) float32 in [0, 1], per triangle; > 0.5: style region
     best_view: int
     matches: list                # (view, x, y, similarity) of the strongest style windows
     view_scores: np.ndarray      # (V,) style windows per view
@@ -60,21 +63,20 @@ def coverage(style: np.ndarray, patch_size: int, image_size: int) -> np.ndarray:
     return hits.cumsum(axis=1).cumsum(axis=2)[:, :image_size, :image_size] > 0
 
 
-def localise_shape(drawings: ShapeDrawings, vertices: np.ndarray, words: np.ndarray,
-                   word_cluster: np.ndarray, cluster: int, patch_size: int,
-                   threshold: float, maps: np.ndarray | None = None) -> ShapeLocalisation:
-    """Per-vertex style weights and best view of one shape in style cluster `cluster`."""
+def localise_shape(drawings: ShapeDrawings, vertices: np.ndarray, faces: np.ndarray,
+                   words: np.ndarray, word_cluster: np.ndarray, cluster: int, patch_size: int,
+                   threshold: float, maps: np.ndarray | None = None,
+                   region_params: regions.RegionParams = regions.RegionParams()) -> ShapeLocalisation:
+    """Per-face and per-vertex style weights and best view of one shape in style cluster
+    `cluster` (vertices in the normalised frame the drawings were made in)."""
     size = drawings.images.shape[-1]
     if maps is None:
         maps = hog_images(drawings.images)
     style, sim = style_windows(maps, words, word_cluster, cluster, threshold)
     cover = coverage(style, patch_size, size)
-    pix, _ = project(drawings.cameras, vertices)
-    xy = np.clip(np.floor(pix).astype(np.int64), 0, size - 1)
-    views = np.arange(drawings.n_views)[:, None]
-    marked = drawings.vertex_visible & cover[views, xy[..., 1], xy[..., 0]]
-    seen = drawings.vertex_visible.sum(axis=0)
-    weights = np.where(seen > 0, marked.sum(axis=0) / np.maximum(seen, 1), 0.0).astype(np.float32)
+    face_w = regions.face_weights(vertices, faces, drawings.cameras, drawings.images, cover,
+                                  region_params)
+    weights = regions.vertex_weights(face_w, faces, face_areas(vertices, faces), len(vertices))
     counts = style.sum(axis=(1, 2))
     sims = np.where(style, sim, 0.0).sum(axis=(1, 2))
     best = int(np.lexsort((sims, counts))[-1])
@@ -85,7 +87,7 @@ def localise_shape(drawings: ShapeDrawings, vertices: np.ndarray, words: np.ndar
         order = np.argsort(-sim[v, rr, cc])[:MAX_BOXES_PER_VIEW]
         matches += [(v, float(cc[k] * PIXELS_PER_CELL + half), float(rr[k] * PIXELS_PER_CELL + half),
                      float(sim[v, rr[k], cc[k]])) for k in order]
-    return ShapeLocalisation(weights, best, matches, counts)
+    return ShapeLocalisation(weights, face_w, best, matches, counts)
 
 
 def top_words(word_cluster: np.ndarray, word_score: np.ndarray, per_cluster: int) -> np.ndarray:
@@ -100,8 +102,3 @@ def top_words(word_cluster: np.ndarray, word_score: np.ndarray, per_cluster: int
         ws = ws[np.argsort(-np.asarray(word_score)[ws], kind="stable")][:per_cluster]
         out[ws] = c
     return out
-
-
-def face_weights(weights: np.ndarray, faces: np.ndarray) -> np.ndarray:
-    """Per-face style weight: the mean of its vertices' weights."""
-    return np.asarray(weights)[faces].mean(axis=1)

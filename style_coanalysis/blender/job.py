@@ -184,8 +184,9 @@ def _run_steps(meshes: list[Mesh], options: JobOptions):
     for i, (m, d) in enumerate(zip(good, drawings)):
         yield ("localise", i, len(good))
         normal = normalise(m, options.up)
-        loc = localisation.localise_shape(d, normal.vertices, result.words, marked_words,
-                                          int(result.clusters[i]), options.params.patch_size,
+        loc = localisation.localise_shape(d, normal.vertices, normal.faces, result.words,
+                                          marked_words, int(result.clusters[i]),
+                                          options.params.patch_size,
                                           options.localisation.match_threshold, maps=maps[i])
         locs.append(loc)
         centre, radius = normalisation(m, options.up)
@@ -259,6 +260,6 @@ def build_report(meshes, shapes, clusters, skipped, options, timings, result, lo
 def localisation_scores(meshes, locs, masks) -> dict:
     """Faces with style weight > 0.5 against the true decorative faces (metrics.region_scores)."""
     from ..meshes import face_areas
-    preds = [localisation.face_weights(loc.weights, m.faces) > 0.5 for m, loc in zip(meshes, locs)]
+    preds = [loc.face_weights > 0.5 for loc in locs]
     areas = [face_areas(m.vertices, m.faces) for m in meshes]
     return metrics.region_scores(preds, masks, areas)
