@@ -29,7 +29,8 @@ def test_face_buffer_keeps_the_nearest_face_and_marks_silhouettes():
     far, ff = _quad(-0.8, 0.8, -0.8, 0.8, -0.2)
     verts = np.concatenate([near, far])
     faces = np.concatenate([fn, ff + 4])
-    buf, depth = regions.face_buffer(verts, faces, cam, 200)
+    bufs, depths = regions.face_buffers(verts, faces, cam[None], 200)
+    buf, depth = bufs[0], depths[0]
     centre = project(cam[None], np.zeros((1, 3)))[0][0, 0].astype(int)
     assert buf[centre[1], centre[0]] in (0, 1)            # the near square hides the far one
     assert buf[0, 0] == -1 and not np.isfinite(depth[0, 0])
