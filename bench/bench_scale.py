@@ -140,6 +140,8 @@ def main() -> None:
     ap.add_argument("--work", default=None, help="folder for the drawing caches (default: a "
                     "temporary folder, removed at the end)")
     ap.add_argument("--mem-limit-gb", type=float, default=12.0)
+    ap.add_argument("--again", action=argparse.BooleanOptionalAction, default=True,
+                    help="run each whole job a second time on the warm cache (default on)")
     args = ap.parse_args()
     work = Path(args.work or tempfile.mkdtemp(prefix="sca_scale_"))
     work.mkdir(parents=True, exist_ok=True)
@@ -158,6 +160,8 @@ def main() -> None:
                     r = run_child(a, args.mem_limit_gb)
                     first[size, renderer, jobs] = r
                     print(row(f"{size} {renderer} jobs={jobs}", r), flush=True)
+                    if not args.again:
+                        continue
                     again = run_child(a, args.mem_limit_gb)
                     print(row(f"{size} {renderer} jobs={jobs} again", again), flush=True)
                     if "error" not in r and "error" not in again:
@@ -183,16 +187,17 @@ def main() -> None:
                                       f", whole job {rs[slow]['wall'] / v['wall']:.1f}x")
 
     if args.analysis_sizes:
-        print(f"\n## Analysis alone: the drawings of {args.analysis_base} sample shapes ({args.analysis_renderer})"
-              " repeated to N shapes, warm cache, 1 job")
+        print(f"\n## Analysis alone: the drawings of {args.analysis_base} sample shapes "
+              f"({args.analysis_renderer}) repeated to N shapes, warm cache, 1 job")
         print(HEADER)
         cache = work / f"cache-repeat-{args.analysis_renderer}"
-        run_child(["--size", str(args.analysis_base), "--renderer", args.analysis_renderer, "--jobs", "2",
-                   "--cache", str(cache)], args.mem_limit_gb)           # fills the cache
+        run_child(["--size", str(args.analysis_base), "--renderer", args.analysis_renderer,
+                   "--jobs", "2", "--cache", str(cache)], args.mem_limit_gb)     # fills the cache
         base = None
         for size in args.analysis_sizes:
-            r = run_child(["--size", str(size), "--renderer", args.analysis_renderer, "--jobs", "1",
-                           "--cache", str(cache), "--repeat-of", str(args.analysis_base)], args.mem_limit_gb)
+            r = run_child(["--size", str(size), "--renderer", args.analysis_renderer,
+                           "--jobs", "1", "--cache", str(cache),
+                           "--repeat-of", str(args.analysis_base)], args.mem_limit_gb)
             print(row(f"N={size}", r), flush=True)
             if "error" in r:
                 continue

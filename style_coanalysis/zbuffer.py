@@ -61,10 +61,10 @@ def rasterise(pixels: np.ndarray, depth: np.ndarray, faces: np.ndarray, size: in
     corners = [np.ascontiguousarray(faces[:, k]) for k in range(3)]
     xs, ys, ds = ([a[f] for f in corners] for a in (x, y, depth))     # per corner, 1-D columns
     # only the triangles whose box holds a pixel centre (fine meshes: many hold none)
-    _, n_rows = _spans(np.minimum(np.minimum(*ys[:2]), ys[2]), np.maximum(np.maximum(*ys[:2]), ys[2]),
-                       size)
-    _, n_cols = _spans(np.minimum(np.minimum(*xs[:2]), xs[2]), np.maximum(np.maximum(*xs[:2]), xs[2]),
-                       size)
+    _, n_rows = _spans(np.minimum(np.minimum(*ys[:2]), ys[2]),
+                       np.maximum(np.maximum(*ys[:2]), ys[2]), size)
+    _, n_cols = _spans(np.minimum(np.minimum(*xs[:2]), xs[2]),
+                       np.maximum(np.maximum(*xs[:2]), xs[2]), size)
     with np.errstate(invalid="ignore"):
         keep = np.flatnonzero((n_rows > 0) & (n_cols > 0) & (ds[0] > 0) & (ds[1] > 0) & (ds[2] > 0))
     xs, ys = [a[keep] for a in xs], [a[keep] for a in ys]
@@ -164,13 +164,12 @@ def ray_visible(zbuf: np.ndarray, tri_id: np.ndarray, pixels: np.ndarray, points
     The buffer proposes the occluders: the triangles nearest the camera at the 4 pixel centres
     around the point's projection, and their edge neighbours (the surface along the exact ray
     may be a neighbour's). A point is hidden when the segment from the camera to it crosses
-    one of them short of the point by more than `TOL_PX` pixels' worth of depth. The triangles
-    it lies on (`own(tri_ids, rows) -> bool`) are not occluders when screening the window.
-    `triangles`: (first corner, first edge, second edge) per face, each (M, 3). Only points with a nearer surface in some but
-    not all of the window's pixels are tested exactly: with none they are seen, with nearer
-    surfaces all around they are hidden.
+    one of them short of the point by more than `TOL_PX` pixels' worth of depth. Only points
+    with a nearer surface (not one they lie on, `own(tri_ids, rows) -> bool`) at some but not
+    all of the 4 pixel centres are tested exactly: with none they are seen, with nearer
+    surfaces all around they are hidden. `triangles`: (first corner, first edge, second edge)
+    per face, each (M, 3).
     """
-    n = len(points)
     corner, edge1, edge2 = triangles
     inside, z, t = _window(zbuf, tri_id, pixels)
     slack = depth * (1.0 - TOL_PX / focal_px)
@@ -287,7 +286,8 @@ class ShapeBuffers:
         self.normals = face_normals(self.vertices, self.faces)
         corners = self.vertices[self.faces]
         self.centres = corners.mean(axis=1)
-        self.triangles = (corners[:, 0], corners[:, 1] - corners[:, 0], corners[:, 2] - corners[:, 0])
+        self.triangles = (corners[:, 0], corners[:, 1] - corners[:, 0],
+                          corners[:, 2] - corners[:, 0])
         # a closed surface turned outwards is only ever seen from its front faces: the back
         # faces can be left out of the buffers (half the work), which stay the same
         self.closed = closed_outwards(self.vertices, self.faces)
@@ -303,10 +303,9 @@ class ShapeBuffers:
         return np.einsum("ij,ij->i", self.normals, self.locations[v] - self.centres) > 0
 
     def points_visible(self, points: np.ndarray, own_face: np.ndarray | None = None,
-                       vertex_ids: np.ndarray | None = None, views=None) -> np.ndarray:
+                       vertex_ids: np.ndarray | None = None) -> np.ndarray:
         """(V, n) bool for surface points lying on `own_face` (seeds) or for mesh vertices
         (`vertex_ids`: their indices, so the triangles using them count as their own)."""
-        views = range(len(self.cameras)) if views is None else views
         points = np.asarray(points, np.float64).reshape(-1, 3)
         if own_face is not None:
             own_face = np.asarray(own_face)
@@ -318,10 +317,10 @@ class ShapeBuffers:
 
             def own(t, idx):
                 return (faces[t] == vertex_ids[idx][:, None]).any(axis=1)
-        out = np.zeros((len(views), len(points)), bool)
-        for k, v in enumerate(views):
+        out = np.zeros((len(self.cameras), len(points)), bool)
+        for v in range(len(self.cameras)):
             pix, depth = project(self.cameras[v:v + 1], points)
-            out[k] = ray_visible(*self.buffers[v], pix[0], points, depth[0], own,
+            out[v] = ray_visible(*self.buffers[v], pix[0], points, depth[0], own,
                                  self.locations[v], self.triangles, self.neighbours,
                                  self.focal_px)
         return out

@@ -58,8 +58,8 @@ def use_scheduler(address: str | None):
     try:
         from . import dask_cluster
     except ImportError as exc:
-        raise InputError(f"--scheduler needs Dask on this machine ({exc}): "
-                         "pip install 'dask[distributed]' (README: running on many machines)") from None
+        raise InputError(f"--scheduler needs Dask on this machine ({exc}): pip install "
+                         "'dask[distributed]' (README: running on many machines)") from None
     with dask_cluster.use_scheduler(address) as client:
         yield client
 
