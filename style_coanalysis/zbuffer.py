@@ -121,7 +121,11 @@ def rasterise(pixels: np.ndarray, depth: np.ndarray, faces: np.ndarray, size: in
 
 def pad(zbuf: np.ndarray, tri_id: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """A buffer with a one-pixel frame of nothing: what `seen_in_buffer` and `ray_visible` take."""
-    return np.pad(zbuf, 1, constant_values=np.inf), np.pad(tri_id, 1, constant_values=-1)
+    h, w = zbuf.shape
+    z = np.full((h + 2, w + 2), np.inf)
+    t = np.full((h + 2, w + 2), -1, tri_id.dtype)
+    z[1:-1, 1:-1], t[1:-1, 1:-1] = zbuf, tri_id
+    return z, t
 
 
 def _window(zbuf: np.ndarray, tri_id: np.ndarray, pixels: np.ndarray):
@@ -214,19 +218,24 @@ def face_normals(vertices: np.ndarray, faces: np.ndarray) -> np.ndarray:
     return np.divide(n, length, out=np.zeros_like(n), where=length > 0)
 
 
-def edges_with_faces(faces: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Unique edges (E, 2) and their first two faces (E, 2), -1 where an edge has one face."""
+def edges_with_faces(faces: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Unique edges (E, 2), their first two faces (E, 2) (-1 where an edge has one face), and
+    whether each edge is closed: exactly two faces, running it in opposite directions."""
     m = len(faces)
-    e = np.sort(faces[:, [0, 1, 1, 2, 2, 0]].reshape(-1, 2).astype(np.int64), axis=1)
+    half = faces[:, [0, 1, 1, 2, 2, 0]].reshape(-1, 2).astype(np.int64)
+    forward = half[:, 0] < half[:, 1]
+    e = np.sort(half, axis=1)
     f = np.repeat(np.arange(m), 3)
     key = e[:, 0] * (int(faces.max()) + 1) + e[:, 1]
     order = np.argsort(key, kind="stable")
-    key, e, f = key[order], e[order], f[order]
+    key, e, f, forward = key[order], e[order], f[order], forward[order]
     first = np.r_[True, key[1:] != key[:-1]]
     starts = np.flatnonzero(first)
     counts = np.diff(np.r_[starts, len(key)])
-    second = np.where(counts >= 2, f[np.minimum(starts + 1, len(f) - 1)], -1)
-    return e[starts], np.stack([f[starts], second], axis=1)
+    nxt = np.minimum(starts + 1, len(f) - 1)
+    second = np.where(counts >= 2, f[nxt], -1)
+    closed = (counts == 2) & (forward[starts] != forward[nxt])
+    return e[starts], np.stack([f[starts], second], axis=1), closed
 
 
 def face_neighbours(edge_faces: np.ndarray, n_faces: int) -> np.ndarray:
@@ -241,33 +250,19 @@ def face_neighbours(edge_faces: np.ndarray, n_faces: int) -> np.ndarray:
     return out
 
 
-def closed_outwards(vertices: np.ndarray, faces: np.ndarray) -> np.ndarray:
+def closed_outwards(vertices: np.ndarray, faces: np.ndarray, edge_faces: np.ndarray,
+                    edge_closed: np.ndarray) -> np.ndarray:
     """(M,) bool per face: does it belong to a closed part turned outwards? A part (faces joined
-    by edges) is closed when each of its edges has exactly two faces running it in opposite
-    directions, and turned outwards when its volume is positive. From outside such a part
-    only its front faces can be seen."""
+    by edges) is closed when each of its edges is (`edges_with_faces`), and turned outwards
+    when its volume is positive. From outside such a part only its front faces can be seen."""
     m = len(faces)
-    if m == 0:
-        return np.zeros(0, bool)
-    directed = faces[:, [0, 1, 1, 2, 2, 0]].reshape(-1, 2).astype(np.int64)
-    face_of = np.repeat(np.arange(m), 3)
-    n = int(faces.max()) + 1
-    undirected = np.sort(directed, axis=1)
-    _, edge_of, count = np.unique(undirected[:, 0] * n + undirected[:, 1], return_inverse=True,
-                                  return_counts=True)
-    _, run_of, runs = np.unique(directed[:, 0] * n + directed[:, 1], return_inverse=True,
-                                return_counts=True)
-    bad_edge = (count[edge_of] != 2) | (runs[run_of] != 1)
-    # parts: faces joined through edges with two faces
-    order = np.argsort(edge_of, kind="stable")
-    pairs = order[count[edge_of[order]] == 2].reshape(-1, 2)
-    first, second = pairs[:, 0], pairs[:, 1]
-    graph = coo_matrix((np.ones(len(first)), (face_of[first], face_of[second])), (m, m))
+    pairs = edge_faces[edge_faces[:, 1] >= 0]
+    graph = coo_matrix((np.ones(len(pairs)), (pairs[:, 0], pairs[:, 1])), (m, m))
     n_parts, part = connected_components(graph, directed=False)
     open_part = np.zeros(n_parts, bool)
-    open_part[part[face_of[bad_edge]]] = True
-    v = vertices.astype(np.float64)[faces]
-    volume = np.einsum("ij,ij->i", v[:, 0], np.cross(v[:, 1], v[:, 2]))
+    open_part[part[edge_faces[~edge_closed, 0]]] = True
+    v = vertices[faces]
+    volume = np.einsum("ij,ij->i", v[:, 0], _cross(v[:, 1], v[:, 2]))
     inward = np.bincount(part, weights=volume, minlength=n_parts) <= 0
     return ~(open_part | inward)[part]
 
@@ -281,7 +276,7 @@ class ShapeBuffers:
         self.faces = np.asarray(faces, np.int64)
         self.cameras, self.locations = cameras, locations
         self.size, self.focal_px = size, focal_px
-        self.edges, self.edge_faces = edges_with_faces(self.faces)
+        self.edges, self.edge_faces, edge_closed = edges_with_faces(self.faces)
         self.neighbours = face_neighbours(self.edge_faces, len(self.faces))
         self.normals = face_normals(self.vertices, self.faces)
         corners = self.vertices[self.faces]
@@ -290,7 +285,7 @@ class ShapeBuffers:
                           corners[:, 2] - corners[:, 0])
         # a closed surface turned outwards is only ever seen from its front faces: the back
         # faces can be left out of the buffers (half the work), which stay the same
-        self.closed = closed_outwards(self.vertices, self.faces)
+        self.closed = closed_outwards(self.vertices, self.faces, self.edge_faces, edge_closed)
         pix, depth = project(cameras, self.vertices)
         self.buffers = []
         for v in range(len(cameras)):
