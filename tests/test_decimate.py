@@ -111,3 +111,17 @@ def test_soft_protection_reaches_the_ratio_and_collapses_style_last(dec, grid):
     assert soft["style_triangles"] > 1.5 * plain["style_triangles"]
     dec.remove_decimate(grid)
     assert grid.vertex_groups.get(dec.SOFT_GROUP) is None and len(grid.modifiers) == 0
+
+
+def test_split_decimation_reaches_the_ratio_and_the_plain_part_takes_the_reduction(dec, grid):
+    split = dec.add_split_decimate(grid, ratio=0.3)
+    assert split["triangles"] == pytest.approx(0.3 * split["triangles_before"], rel=0.03)
+    assert [m.name for m in grid.modifiers] == list(dec.SPLIT_MODIFIERS)
+    # the plain three quarters go down to a tenth; the style quarter keeps the rest of the budget
+    plain_kept = split["triangles"] - split["style_triangles"]
+    assert plain_kept < 0.2 * (split["triangles_before"] - split["style_triangles_before"])
+    kept = split["style_triangles"]
+    dec.remove_decimate(grid)
+    assert len(grid.modifiers) == 0 and all(grid.vertex_groups.get(g) is None for g in dec.SPLIT_GROUPS)
+    plain = dec.match_plain_to(grid, split["triangles"])
+    assert kept > 1.5 * plain["style_triangles"]

@@ -12,6 +12,14 @@ cannot get anywhere near the requested ratio. `hard=False` drives the modifier w
 `style_weight_soft` (the weights capped at SOFT_CAP < 1): no vertex is then untouchable, but
 style edges cost far more to collapse, so the ratio is reached by decimating the rest first.
 
+`add_split_decimate` is the third way, the issue's "separate targets": the plain part (triangles
+outside the style regions) is decimated first to its own, lower target with the style part frozen,
+then the style part takes the rest of the budget with the plain part frozen. Each pass is plain
+quadric decimation inside its part (group weights exactly 0 or 1), so the style part's collapses
+are chosen by geometric error alone; the soft group's weights below 1 add a cost that grows with
+edge length (Blender's modifier), which is why the soft mode can lose to plain decimation in the
+style region at the same count (bench/bench_decimate.py).
+
 One decimation per object at a time: adding the style-preserving modifier removes the plain one
 and vice versa (stacking both would decimate twice). Compare the two on duplicates, or one after
 the other as `match_plain_to` and the bench do.
@@ -30,6 +38,8 @@ from .writeback import GROUP, SOFT_GROUP, THRESHOLD, set_group_weights, vertex_w
 SOFT_CAP = 0.99
 STYLE_MODIFIER = "Style Decimate"
 PLAIN_MODIFIER = "Plain Decimate"
+SPLIT_MODIFIERS = ("Style Decimate: plain part", "Style Decimate: style part")
+SPLIT_GROUPS = ("style_split_plain", "style_split_style")
 
 
 def triangle_counts(obj, mesh=None, group: str = GROUP) -> tuple[int, int]:
@@ -59,14 +69,15 @@ def evaluated_counts(obj, depsgraph=None) -> tuple[int, int]:
 
 
 def remove_decimate(obj) -> None:
-    """Remove the decimate modifiers this module added (either kind) and the soft group."""
-    for name in (STYLE_MODIFIER, PLAIN_MODIFIER):
+    """Remove the decimate modifiers this module added (any kind) and their derived groups."""
+    for name in (STYLE_MODIFIER, PLAIN_MODIFIER, *SPLIT_MODIFIERS):
         mod = obj.modifiers.get(name)
         if mod is not None:
             obj.modifiers.remove(mod)
-    group = obj.vertex_groups.get(SOFT_GROUP)
-    if group is not None:
-        obj.vertex_groups.remove(group)
+    for name in (SOFT_GROUP, *SPLIT_GROUPS):
+        group = obj.vertex_groups.get(name)
+        if group is not None:
+            obj.vertex_groups.remove(group)
 
 
 def _soft_group(obj):
@@ -125,6 +136,51 @@ def add_decimate(obj, ratio: float, strength: float = 1.0, style_preserving: boo
         "requested_triangles": int(round(ratio * before)),
         "triangles_before": before, "style_triangles_before": style_before,
         "triangles": after, "style_triangles": style_after, "applied": bool(apply),
+    }
+
+
+def add_split_decimate(obj, ratio: float, plain_keep: float | None = None, apply: bool = False,
+                       depsgraph=None) -> dict:
+    """Decimate the plain part to `plain_keep` of its triangles (default: a third of `ratio`),
+    then the style part to whatever reaches `ratio` overall (see the module docstring). Two
+    stacked COLLAPSE modifiers; returns the same counts as `add_decimate`."""
+    if obj is None or obj.type != "MESH":
+        raise ValueError(f"'{getattr(obj, 'name', obj)}' is not a mesh object")
+    if obj.vertex_groups.get(GROUP) is None:
+        raise ValueError(f"'{obj.name}' has no '{GROUP}' vertex group: analyse it first")
+    remove_decimate(obj)
+    before, style_before = triangle_counts(obj)
+    if before == 0:
+        raise ValueError(f"'{obj.name}' has no faces")
+    mesh = obj.data
+    tris = np.empty(len(mesh.loop_triangles) * 3, dtype=np.int32)
+    mesh.loop_triangles.foreach_get("vertices", tris)
+    tris = tris.reshape(-1, 3)
+    weights = vertex_weights(obj)
+    style_vertex = np.zeros(len(mesh.vertices), bool)
+    style_vertex[tris[weights[tris].mean(axis=1) > THRESHOLD].ravel()] = True
+    # weight 0 freezes a vertex, 1 leaves plain quadric decimation (the border stays put)
+    plain_group = set_group_weights(obj, SPLIT_GROUPS[0], (~style_vertex).astype(np.float32)).name
+    style_group = set_group_weights(obj, SPLIT_GROUPS[1], style_vertex.astype(np.float32)).name
+    keep = ratio / 3.0 if plain_keep is None else float(plain_keep)
+    target = int(round(ratio * before))
+    first = obj.modifiers.new(SPLIT_MODIFIERS[0], "DECIMATE")
+    first.ratio = min(1.0, (style_before + keep * (before - style_before)) / before)
+    first.vertex_group = plain_group
+    after_plain, _ = evaluated_counts(obj, depsgraph)
+    second = obj.modifiers.new(SPLIT_MODIFIERS[1], "DECIMATE")
+    second.ratio = min(1.0, target / max(after_plain, 1))
+    second.vertex_group = style_group
+    after, style_after = evaluated_counts(obj, depsgraph)
+    if apply:
+        for name in SPLIT_MODIFIERS:
+            _apply(obj, name)
+    return {
+        "object": obj.name, "modifier": SPLIT_MODIFIERS[1], "style_preserving": True,
+        "hard": None, "ratio": float(ratio), "strength": 0.0, "plain_keep": keep,
+        "requested_triangles": target, "triangles_before": before,
+        "style_triangles_before": style_before, "triangles": after, "style_triangles": style_after,
+        "applied": bool(apply),
     }
 
 
