@@ -15,9 +15,10 @@ Two kinds of evidence, because the two generated collections disagree on which o
   matched style patches). Ornament drawn mostly by its outline (a cabriole leg) is found so.
 * carved regions: connected regions of faces densely covered by interior strokes (ink away from
   silhouettes, which say where a part ends, not what is carved on it) that hold at least one
-  face whose strokes are mostly style-window strokes. This is the patch-to-region extension: a
-  matched style stroke marks the whole carved region it lies in, and the region stops where the
-  strokes stop, at the plain surface around it.
+  face marked by the window cover. This is the patch-to-region extension: a matched style patch
+  marks the whole carved region it lies on, and the region stops where the strokes stop, at the
+  plain surface around it. (Seeding from the cover rather than from style-window strokes: area
+  IoU 0.35 vs 0.33 on the sample, 0.47 vs 0.39 on collection2, exploration with seed 0.)
 
 Before either test the per-face densities are diffused a few steps over the face adjacency, so
 faces too small to own a pixel at 200 px take their neighbours' value; measured faces keep
@@ -39,9 +40,8 @@ from .zbuffer import rasterise
 class RegionParams:
     """How surface evidence becomes style regions (see the module docstring)."""
 
-    cover: float = 0.7            # share of a face's seen pixels under style windows
+    cover: float = 0.8            # share of a face's seen pixels under style windows
     stroke_density: float = 0.5   # interior ink per seen interior pixel of a carved region
-    seed_density: float = 0.3     # style-window ink share that makes a face a region's seed
     depth_jump: float = 0.1       # depth step (unit-sphere frame) that makes a silhouette
     dilate: int = 1               # pixels a stroke is widened by (a line sits on a face's edge)
     smooth_steps: int = 4         # diffusion steps over the face adjacency
@@ -61,12 +61,10 @@ def face_weights(vertices, faces, cameras, images, cover, params: RegionParams =
     outline = np.stack([ndimage.binary_dilation(o, grow) for o in outline])
     seen, under = face_evidence(buffers, n, cover, dilate=0)
     seen_in, strokes = face_evidence(buffers, n, ink & ~outline, params.dilate, where=~outline)
-    _, style_strokes = face_evidence(buffers, n, ink & cover & ~outline, params.dilate, where=~outline)
     adj = face_adjacency(faces, len(vertices))
     cov = extend(under, seen, adj, params.smooth_steps)
     dense = extend(strokes, seen_in, adj, params.smooth_steps)
-    seed = extend(style_strokes, seen_in, adj, params.smooth_steps) > params.seed_density
-    carved = seeded_components(dense > params.stroke_density, seed, adj)
+    carved = seeded_components(dense > params.stroke_density, cov > params.cover, adj)
     w = np.clip(cov / (2 * params.cover), 0, 1)
     w = np.maximum(w, np.where(carved, 0.5 + 0.5 * np.clip(dense, 0, 1), 0.0))
     return w.astype(np.float32)
