@@ -67,7 +67,15 @@ def connect(address: str) -> Client:
         except TimeoutError:
             raise InputError(f"the Dask scheduler at '{address}' has no worker (waited "
                              f"{WORKER_WAIT_S} s): start some with 'dask worker {address}'") from None
-        daemonic = [w for w, d in client.run(_is_daemonic).items() if d]
+        try:        # the scheduler unpickles tasks and the workers run them: both import us
+            client.submit(_is_daemonic, pure=False).result(timeout=WORKER_WAIT_S)
+            daemonic = [w for w, d in client.run(_is_daemonic).items() if d]
+        except Exception as exc:
+            text = str(exc).strip().splitlines()
+            raise InputError(f"the Dask cluster at '{address}' cannot run the drawing: "
+                             f"{type(exc).__name__}: {text[0] if text else ''} (the scheduler and "
+                             "every worker need this repository on their PYTHONPATH, see README)"
+                             ) from None
         if daemonic:
             raise InputError(f"Dask worker(s) {', '.join(sorted(daemonic))}: {DAEMONIC}")
         client.register_plugin(BlenderWorkers(), name=PLUGIN)
