@@ -16,7 +16,7 @@ from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
-from skimage import io as skio
+from PIL import Image, UnidentifiedImageError
 from skimage.filters import threshold_otsu
 from skimage.morphology import skeletonize
 from skimage.transform import resize
@@ -42,8 +42,11 @@ class DrawingSet:
 
 def _ink(path: Path) -> np.ndarray:
     try:
-        img = skio.imread(str(path), as_gray=True).astype(np.float64)
-    except Exception as exc:  # noqa: BLE001 - any unreadable image is refused by name
+        with Image.open(path) as im:
+            rgba = im.convert("RGBA")       # transparent paper counts as white
+        white = Image.new("RGBA", rgba.size, (255, 255, 255, 255))
+        img = np.asarray(Image.alpha_composite(white, rgba).convert("L"), np.float64) / 255.0
+    except (OSError, UnidentifiedImageError, ValueError) as exc:
         raise InputError(f"'{path}' is not a readable image: {exc}") from None
     if img.ndim != 2 or min(img.shape) < 8:
         raise InputError(f"'{path}' is not a 2D drawing of at least 8x8 pixels")
