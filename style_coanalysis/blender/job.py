@@ -258,8 +258,10 @@ def build_report(meshes, shapes, clusters, skipped, options, timings, result, lo
 
 
 def localisation_scores(meshes, locs, masks) -> dict:
-    """Faces with style weight > 0.5 against the true decorative faces (metrics.region_scores)."""
+    """Faces with style weight > 0.5 against the true decorative faces (metrics.region_scores),
+    areas in each shape's normalised frame (as bench/bench_localisation.py): files come in any
+    unit, and world areas would let the largest shapes decide the figure."""
     from ..meshes import face_areas
     preds = [loc.face_weights > 0.5 for loc in locs]
-    areas = [face_areas(m.vertices, m.faces) for m in meshes]
+    areas = [face_areas(normalise(m).vertices, m.faces) for m in meshes]
     return metrics.region_scores(preds, masks, areas)
