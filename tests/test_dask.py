@@ -1,22 +1,26 @@
-"""Drawing on a real Dask cluster (`--scheduler`): a LocalCluster of 2 worker processes.
+"""Drawing on a real Dask cluster (`--scheduler`): a scheduler and 2 worker processes on this
+machine, started with the README's `dask scheduler` / `dask worker` commands.
 
 The same drawings and the same partition as a local run; a worker killed while it draws has its
 shapes drawn elsewhere and leaves no Blender process behind; a bad address is refused before any
-drawing; Dask is never part of what the extension zip bundles.
+drawing; Dask is never part of what the extension zip bundles. The Dask client runs in
+subprocesses (`dask_scenarios.py`, the command line): it leaves threads in its process.
 """
+import importlib.util
 import json
 import os
-import signal
 import subprocess
 import sys
 import time
 from pathlib import Path
 
-import numpy as np
 import pytest
 
 ROOT = Path(__file__).resolve().parent.parent
 pytestmark = [pytest.mark.blender, pytest.mark.slow]
+# found, not imported: no Dask in this process (see the module docstring)
+needs_dask = pytest.mark.skipif(importlib.util.find_spec("distributed") is None,
+                                reason="Dask (dask[distributed]) is not installed")
 
 
 def run_cmd(*args, timeout=900):
@@ -40,8 +44,8 @@ def test_dask_is_not_bundled_nor_imported_without_a_scheduler():
     assert res.stdout.strip() == "[]"
 
 
+@needs_dask
 def test_unreachable_scheduler_is_refused_before_drawing(tmp_path):
-    pytest.importorskip("distributed")
     folder = tmp_path / "in"
     folder.mkdir()
     (folder / "tri.obj").write_text("v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 1\nf 1 2 3\nf 1 3 4\nf 1 4 2\n"
@@ -53,65 +57,69 @@ def test_unreachable_scheduler_is_refused_before_drawing(tmp_path):
     assert not (tmp_path / "out").exists() and not (tmp_path / "cache").exists()
 
 
+def start(args: list[str], env: dict, log: Path) -> subprocess.Popen:
+    bindir = Path(sys.executable).parent
+    return subprocess.Popen([str(bindir / "dask"), *args], cwd=ROOT, env=env,
+                            stdout=log.open("w"), stderr=subprocess.STDOUT)
+
+
 @pytest.fixture(scope="module")
 def cluster(tmp_path_factory):
-    """2 worker processes, 1 thread each, with their own drawing cache (XDG_CACHE_HOME)."""
-    dask = pytest.importorskip("dask")
-    distributed = pytest.importorskip("distributed")
-    worker_home = tmp_path_factory.mktemp("worker_cache")
-    # for the whole cluster's life: the nanny reads it again when it restarts a killed worker
-    with dask.config.set({"distributed.worker.daemon": False}):
-        with distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True,
-                                      dashboard_address=None, host="127.0.0.1",
-                                      env={"XDG_CACHE_HOME": str(worker_home)}) as cl:
-            yield cl, worker_home
+    """The README's cluster on this machine: `dask scheduler` and `dask worker --nworkers 2
+    --nthreads 1`, with the repository on PYTHONPATH and their own drawing cache (XDG_CACHE_HOME).
+    Separate processes: no Dask client or thread in this test process."""
+    if importlib.util.find_spec("distributed") is None:
+        pytest.skip("Dask (dask[distributed]) is not installed")
+    tmp = tmp_path_factory.mktemp("cluster")
+    env = dict(os.environ, PYTHONPATH=str(ROOT), DASK_DISTRIBUTED__WORKER__DAEMON="False",
+               XDG_CACHE_HOME=str(tmp / "worker_cache"))
+    file = tmp / "scheduler.json"
+    procs = [start(["scheduler", "--host", "127.0.0.1", "--port", "0", "--no-dashboard",
+                    "--scheduler-file", str(file)], env, tmp / "scheduler.log")]
+    try:
+        deadline = time.monotonic() + 120
+        while not file.exists() and time.monotonic() < deadline:
+            time.sleep(0.2)
+        assert file.exists(), (tmp / "scheduler.log").read_text()[-2000:]
+        procs.append(start(["worker", "--scheduler-file", str(file), "--nworkers", "2",
+                            "--nthreads", "1", "--host", "127.0.0.1", "--no-dashboard"], env,
+                           tmp / "worker.log"))
+        yield json.loads(file.read_text())["address"], tmp / "worker_cache"
+    finally:
+        for p in reversed(procs):       # workers first, then the scheduler
+            p.terminate()
+            try:
+                p.wait(timeout=60)
+            except subprocess.TimeoutExpired:
+                p.kill()
+                p.wait()
 
 
-@pytest.fixture(scope="module")
-def shapes():
-    from style_coanalysis import sample
-    return sample.generate(size=6, seed=1)
+def scenario(what: str, address: str, tmp: Path) -> dict:
+    res = subprocess.run([sys.executable, str(ROOT / "tests" / "dask_scenarios.py"), what, address,
+                          str(tmp)], cwd=ROOT, capture_output=True, text=True, timeout=900)
+    lines = [line for line in res.stdout.splitlines() if line.startswith("RESULT ")]
+    assert res.returncode == 0 and lines, res.stderr[-3000:]
+    return json.loads(lines[-1][7:])
 
 
-def local_drawings(shapes, settings):
-    from style_coanalysis.blender import batch
-    drawings, skipped = batch.draw_collection(shapes, settings, cache_dir=False, jobs=1)
-    assert not skipped
-    return drawings
-
-
-def assert_same(a, b):
-    assert [d.name for d in a] == [d.name for d in b]
-    for x, y in zip(a, b):
-        for k, v in x.to_arrays().items():
-            assert np.array_equal(v, y.to_arrays()[k]), (x.name, k)
-
-
-def test_cluster_draws_what_a_local_run_draws(cluster, shapes, tmp_path):
-    from style_coanalysis.blender import batch
-    from style_coanalysis.params import DrawingSettings
-    cl, worker_home = cluster
-    s = DrawingSettings(renderer="lineart")
-    events = []
-    with batch.use_scheduler(cl.scheduler_address) as client:
-        remote, skipped = batch.draw_collection(shapes, s, cache_dir=tmp_path / "cache",
-                                                progress=lambda *e: events.append(e))
-        ran_on = set(client.scheduler_info()["workers"])
-    assert not skipped and len(ran_on) == 2
-    assert ("render", len(shapes), len(shapes)) in events
-    assert_same(remote, local_drawings(shapes, s))
+def test_cluster_draws_what_a_local_run_draws(cluster, tmp_path):
+    address, worker_cache = cluster
+    r = scenario("same", address, tmp_path)
+    assert r["skipped"] == [] and r["workers"] == 2
+    assert r["last_event"] == ["render", r["n"], r["n"]]
+    assert r["same"]                                    # every array equal to the local run's
     # every shape is in the parent's cache and in a worker's own cache
-    worker_entries = list((worker_home / "style_coanalysis").rglob("*.npz"))
-    assert len(list((tmp_path / "cache").rglob("*.npz"))) == len(shapes)
-    assert len(worker_entries) == len(shapes)
+    assert r["parent_cache"] == r["n"]
+    assert len(list((worker_cache / "style_coanalysis").rglob("*.npz"))) == r["n"]
 
 
 def test_analysis_on_the_cluster_gives_the_local_partition(cluster, tmp_path):
-    cl, _ = cluster
+    address, _ = cluster
     res = run_cmd("sample", "--out", tmp_path / "sample", "--size", 12, "--seed", 3)
     assert res.returncode == 0, res.stderr[-3000:]
     reports = {}
-    for how, extra in (("local", ["--jobs", 2]), ("dask", ["--scheduler", cl.scheduler_address])):
+    for how, extra in (("local", ["--jobs", 2]), ("dask", ["--scheduler", address])):
         out = tmp_path / how / "result"
         res = run_cmd("analyze", tmp_path / "sample" / "sample.blend", "--out", out,
                       "--renderer", "lineart", "--cache", tmp_path / how / "cache", "--rounds", 2,
@@ -124,38 +132,9 @@ def test_analysis_on_the_cluster_gives_the_local_partition(cluster, tmp_path):
     assert reports["dask"]["clusters"] == reports["local"]["clusters"]
 
 
-def test_a_killed_worker_s_shapes_are_drawn_elsewhere(cluster, shapes, tmp_path):
-    psutil = pytest.importorskip("psutil")
-    from style_coanalysis.blender import batch
-    from style_coanalysis.params import DrawingSettings
-    cl, _ = cluster
-    s = DrawingSettings(renderer="lineart", seed=7)     # not in the workers' caches yet
-    with batch.use_scheduler(cl.scheduler_address) as client:
-        steps = batch.draw_steps(shapes, s, cache_dir=False)
-        victim, blender_children = None, []
-        try:
-            while victim is None:
-                next(steps)
-                busy = {w: keys for w, keys in client.processing().items() if keys}
-                pids = client.run(os.getpid)
-                for w in busy:
-                    children = psutil.Process(pids[w]).children()
-                    if children:            # its Blender process is up: it is drawing
-                        victim, blender_children = w, children
-                        os.kill(pids[w], signal.SIGKILL)
-                        break
-            while True:
-                next(steps)
-        except StopIteration as stop:
-            remote, skipped = stop.value
-        finally:
-            steps.close()
-    assert not skipped, skipped
-    assert_same(remote, local_drawings(shapes, s))
-    # the killed worker's Blender processes noticed and ended
-    deadline = time.monotonic() + 30
-    while any(c.is_running() and c.status() != psutil.STATUS_ZOMBIE for c in blender_children) \
-            and time.monotonic() < deadline:
-        time.sleep(0.5)
-    assert not any(c.is_running() and c.status() != psutil.STATUS_ZOMBIE
-                   for c in blender_children)
+def test_a_killed_worker_s_shapes_are_drawn_elsewhere(cluster, tmp_path):
+    address, _ = cluster
+    r = scenario("kill", address, tmp_path)
+    assert r["killed_with_blender"] >= 1        # the worker was killed while Blender drew
+    assert r["skipped"] == [] and r["same"]     # yet every shape was drawn, as locally
+    assert r["blender_left"] == 0               # and its Blender processes ended with it
