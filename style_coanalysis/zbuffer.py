@@ -27,6 +27,8 @@ from scipy.sparse.csgraph import connected_components
 
 from .rig import project
 
+# Part of the drawing cache's key for this renderer: bump when its output changes
+VERSION = "zbuffer-2"
 TOL_PX = 1.0                # depth slack, in pixels' worth of depth at the point
 STEP_PX = 0.5               # spacing of the samples along a line, in pixels
 MAX_PAIRS = 4_000_000       # (triangle, pixel) candidates rasterised at once (memory bound)

@@ -260,3 +260,20 @@ def test_no_leaks_and_user_scene_untouched():
     assert counts() == before
     assert bpy.context.scene.name == user_scene
     assert len(bpy.context.scene.objects) == 0
+
+
+def test_zbuffer_version_is_in_its_cache_key_only(monkeypatch):
+    """Changing the zbuffer renderer (its VERSION) changes its drawings' cache key and no other
+    renderer's, so the others' cache entries stay valid."""
+    from style_coanalysis import zbuffer
+    from style_coanalysis.blender.batch import drawing_version
+    from style_coanalysis.cache import CODE_VERSION, cache_key
+    mesh = normalise(cube())
+    keys = {r: cache_key(mesh, DrawingSettings(renderer=r), drawing_version(DrawingSettings(
+        renderer=r))) for r in RENDERERS}
+    monkeypatch.setattr(zbuffer, "VERSION", zbuffer.VERSION + "-next")
+    for r in RENDERERS:
+        again = cache_key(mesh, DrawingSettings(renderer=r), drawing_version(DrawingSettings(
+            renderer=r)))
+        assert (again == keys[r]) == (r != "zbuffer"), r
+    assert keys["freestyle"] == cache_key(mesh, DrawingSettings(renderer="freestyle"), CODE_VERSION)

@@ -64,6 +64,15 @@ def use_scheduler(address: str | None):
         yield client
 
 
+def drawing_version(settings: DrawingSettings) -> str:
+    """The code version in a drawing's cache key: the zbuffer renderer has one of its own, so
+    changing it leaves the other renderers' cache entries valid."""
+    if settings.renderer == "zbuffer":
+        from ..zbuffer import VERSION
+        return f"{CODE_VERSION}+{VERSION}"
+    return CODE_VERSION
+
+
 def in_blender_gui() -> bool:
     """True inside a Blender executable (GUI or `blender -b`), False for the bpy module."""
     import bpy
@@ -174,7 +183,7 @@ def draw_steps(meshes: Sequence[Mesh], settings: DrawingSettings, cache_dir=None
         except InputError as exc:
             skipped[i] = (raw.name, _describe(exc))
             continue
-        key = cache_key(mesh, settings, CODE_VERSION) if cache else None
+        key = cache_key(mesh, settings, drawing_version(settings)) if cache else None
         hit = cache.load(key) if cache else None
         if hit is not None:
             hit.name = raw.name

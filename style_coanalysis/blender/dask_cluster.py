@@ -27,7 +27,7 @@ from concurrent.futures.process import BrokenProcessPool, ProcessPoolExecutor
 import numpy as np
 from distributed import Client, WorkerPlugin, get_worker
 
-from ..cache import CODE_VERSION, DrawingCache, cache_key
+from ..cache import DrawingCache, cache_key
 from ..drawings import ShapeDrawings
 from ..meshes import InputError, Mesh
 from . import batch
@@ -168,7 +168,7 @@ class BlenderWorkers(WorkerPlugin):
             return self.pool
 
     def draw(self, name: str, vertices, faces, settings) -> dict:
-        key = cache_key(Mesh(name, vertices, faces), settings, CODE_VERSION)
+        key = cache_key(Mesh(name, vertices, faces), settings, batch.drawing_version(settings))
         hit = self.cache.load(key)
         if hit is not None:
             hit.name = name
