@@ -5,6 +5,7 @@ tuned on, beside trivial baselines and the paper's method, and is it stable?
     python bench/generalisation.py                          # every collection, mode and method
     python bench/generalisation.py --collections sample hu2017-60 --modes k auto --methods default
     python bench/generalisation.py --table bench/results/generalisation.json   # reprint a table
+    python bench/generalisation.py --table old.json new.json   # one table of several runs
 
 Collections, modes and the scoring loop live in `style_coanalysis/evaluation/benchmark.py`
 (importable: `load_collection`, `evaluate`, `summary_table`). Writes
@@ -68,11 +69,14 @@ def main(argv=None) -> int:
                          "and seed)")
     ap.add_argument("--out", default=None, help="output stem under bench/results "
                     "(default generalisation, generalisation_quick with --quick)")
-    ap.add_argument("--table", metavar="JSON", default=None,
-                    help="only print the Markdown table of a saved result (e.g. a partial full run)")
+    ap.add_argument("--table", metavar="JSON", nargs="+", default=None,
+                    help="only print the Markdown table of saved results (e.g. partial runs); "
+                         "with several files, a method's figures in a later file replace the "
+                         "same collection and mode of an earlier one")
     args = ap.parse_args(argv)
     if args.table:
-        print(B.summary_table(json.loads(Path(args.table).read_text())))
+        print(B.summary_table(B.merge_results([json.loads(Path(f).read_text())
+                                               for f in args.table])))
         return 0
 
     collections = B.select_collections(args.collections or (B.QUICK_COLLECTIONS if args.quick else None))

@@ -179,3 +179,17 @@ def test_missing_collection_is_skipped_with_a_note(monkeypatch):
     assert res["collections"] == {} and "not written yet" in res["skipped_collections"]["gone"]
     assert any("skipped gone" in n for n in notes)
     assert "skipped: not written yet" in B.summary_table(res)
+
+
+def test_merged_runs_take_each_method_from_the_latest_run_that_has_it():
+    def run(method, value, extra=None):
+        row = {method: {"summary": {"purity": {"mean": value}}}}
+        return {"settings": {"seeds": [0]}, "collections": {
+            "c": {"n_shapes": 4, "modes": {"k": row, **(extra or {})}}}}
+    old = run("paper", 0.3)
+    old["collections"]["c"]["modes"]["k"]["default"] = {"summary": {"purity": {"mean": 0.5}}}
+    new = run("default", 0.9, {"auto": {"default": {"n/a": "failed"}}})
+    merged = B.merge_results([old, new])["collections"]["c"]["modes"]
+    assert merged["k"]["default"]["summary"]["purity"]["mean"] == 0.9      # replaced
+    assert merged["k"]["paper"]["summary"]["purity"]["mean"] == 0.3        # kept
+    assert merged["auto"]["default"] == {"n/a": "failed"}                  # new mode, as it came

@@ -656,6 +656,24 @@ def stability_for(coll: Collection, seeds, analyse_fn, partitions: dict, render:
 
 
 # ------------------------------------------------------------------ reporting
+def merge_results(runs: Sequence[dict]) -> dict:
+    """Several runs' results as one: per collection, mode and method the latest run that has
+    it (runs in order), its baselines and stability likewise; settings of the last run."""
+    out = {"settings": dict(runs[-1]["settings"]), "collections": {}, "skipped_collections": {}}
+    for run in runs:
+        out["skipped_collections"].update(run.get("skipped_collections", {}))
+        for name, e in run["collections"].items():
+            into = out["collections"].setdefault(name, {**e, "modes": {}})
+            into.update({k: v for k, v in e.items() if k != "modes"})
+            for mode, row in e["modes"].items():
+                into["modes"].setdefault(mode, {}).update(
+                    {m: r for m, r in row.items() if r.get("summary") or m not in
+                     into["modes"].get(mode, {})})
+    for name in out["collections"]:
+        out["skipped_collections"].pop(name, None)
+    return out
+
+
 def _fmt(x, digits=3) -> str:
     return "n/a" if x is None else f"{x:.{digits}f}"
 
