@@ -102,14 +102,7 @@ def measure(obj, original, n_points, seed):
     """Triangles kept and surface error per region for the object's current modifier stack."""
     v0, t0, w0 = original
     style0 = style_region(obj.name, t0, w0)
-    dg = bpy.context.evaluated_depsgraph_get()
-    dg.update()
-    ev = obj.evaluated_get(dg)
-    me = ev.to_mesh()
-    try:
-        v1, t1, w1 = arrays(obj, me)
-    finally:
-        ev.to_mesh_clear()
+    v1, t1, w1 = evaluated_arrays(obj)
     style1 = w1[t1].mean(1) > writeback.THRESHOLD
     tree = BVHTree.FromPolygons(v1.tolist(), t1.tolist())
     diag = np.linalg.norm(np.ptp(v0, axis=0))
@@ -171,15 +164,15 @@ def run(objects, ratio, strength, n_points, picture=None):
 
 
 def evaluated_arrays(obj):
+    """(vertices, triangles, style weights) of the object after its modifier stack."""
     dg = bpy.context.evaluated_depsgraph_get()
     dg.update()
     ev = obj.evaluated_get(dg)
     me = ev.to_mesh()
     try:
-        v, t, _ = arrays(obj, me)
+        return arrays(obj, me)
     finally:
         ev.to_mesh_clear()
-    return v, t
 
 
 def draw_picture(obj, original, style0, ratio, path):
@@ -191,10 +184,10 @@ def draw_picture(obj, original, style0, ratio, path):
     from style_coanalysis.rig import Rig, project
     v0, t0, _ = original
     decimate.add_split_decimate(obj, ratio)
-    sp = evaluated_arrays(obj)
+    sp = evaluated_arrays(obj)[:2]
     decimate.remove_decimate(obj)
     decimate.match_plain_to(obj, len(sp[1]))
-    pl = evaluated_arrays(obj)
+    pl = evaluated_arrays(obj)[:2]
     centre = v0.mean(axis=0)
     radius = np.linalg.norm(v0 - centre, axis=1).max()
     cam = Rig(image_size=400).matrices()[1]
