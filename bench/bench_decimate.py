@@ -165,14 +165,7 @@ def run(objects, ratio, strength, n_points, picture=None):
 
 def evaluated_arrays(obj):
     """(vertices, triangles, style weights) of the object after its modifier stack."""
-    dg = bpy.context.evaluated_depsgraph_get()
-    dg.update()
-    ev = obj.evaluated_get(dg)
-    me = ev.to_mesh()
-    try:
-        return arrays(obj, me)
-    finally:
-        ev.to_mesh_clear()
+    return decimate.evaluated(obj, arrays)
 
 
 def draw_picture(obj, original, style0, ratio, path):

@@ -56,16 +56,22 @@ def triangle_counts(obj, mesh=None, group: str = GROUP) -> tuple[int, int]:
     return n, int(style.sum())
 
 
-def evaluated_counts(obj, depsgraph=None) -> tuple[int, int]:
-    """Triangle counts after the object's modifier stack."""
+def evaluated(obj, read, depsgraph=None):
+    """`read(obj, mesh)` of the object's mesh after its modifier stack (a temporary mesh,
+    freed afterwards)."""
     depsgraph = depsgraph or bpy.context.evaluated_depsgraph_get()
     depsgraph.update()
     obj_eval = obj.evaluated_get(depsgraph)
     mesh = obj_eval.to_mesh()
     try:
-        return triangle_counts(obj, mesh)
+        return read(obj, mesh)
     finally:
         obj_eval.to_mesh_clear()
+
+
+def evaluated_counts(obj, depsgraph=None) -> tuple[int, int]:
+    """Triangle counts after the object's modifier stack."""
+    return evaluated(obj, triangle_counts, depsgraph)
 
 
 def remove_decimate(obj) -> None:
