@@ -220,18 +220,15 @@ def _label_transduction(a: np.ndarray, features: np.ndarray, y: np.ndarray, n_cl
             folds.append((i, yy))
     part = graph.partition(a, n_classes, random_state)
 
-    def by_partition(yy):
-        return _clusters_to_classes(part, yy, n_classes)
-
     def by_metric(yy):
-        return _clusters_to_classes(graph.partition(_label_metric_graph(a, features, yy),
-                                                    n_classes, random_state), yy, n_classes)
+        g = _label_metric_graph(a, features, yy)
+        return _clusters_to_classes(graph.partition(g, n_classes, random_state), yy, n_classes), g
 
-    use_metric = bool(folds) and (sum(int(by_metric(yy)[i] == y[i]) for i, yy in folds) >
-                                  sum(int(by_partition(yy)[i] == y[i]) for i, yy in folds))
-    clusters = (by_metric if use_metric else by_partition)(y)
+    use_metric = bool(folds) and (
+        sum(int(by_metric(yy)[0][i] == y[i]) for i, yy in folds) >
+        sum(int(_clusters_to_classes(part, yy, n_classes)[i] == y[i]) for i, yy in folds))
+    clusters, g = by_metric(y) if use_metric else (_clusters_to_classes(part, y, n_classes), a)
     clusters[lab] = y[lab]
-    g = _label_metric_graph(a, features, y) if use_metric else a
     # class distribution: each shape's affinity to the members of each class
     onehot = np.eye(n_classes)[clusters]
     dist = g @ onehot + 1e-12
