@@ -19,7 +19,7 @@ from pathlib import Path
 from .meshes import InputError
 from .params import AnalysisParams, DrawingSettings, LocalisationParams
 
-RENDERERS = ("freestyle", "lineart")
+RENDERERS = ("freestyle", "lineart", "zbuffer")
 UP_AXES = ("z", "y")
 METHODS = ("default", "paper")
 DEFAULTS = AnalysisParams()              # the paper's values, read from params.py only

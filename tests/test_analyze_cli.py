@@ -199,3 +199,15 @@ def test_folder_of_obj_files_gives_objects_with_results(sample, first_run, tmp_p
     assert all("style_weight" in o["groups"] for o in state["objects"].values())
     rep = json.loads((tmp_path / "report.json").read_text())
     assert {s["source"] for s in rep["shapes"]} == {str(p) for p in (sample / "meshes").glob("*.obj")}
+
+
+def test_the_numpy_renderer_runs_the_whole_analysis(sample, tmp_path):
+    """--renderer zbuffer (no render engine): every shape drawn, clustered and given regions."""
+    res = run_cmd("analyze", sample / "sample.blend", "--out", tmp_path / "o", "--renderer",
+                  "zbuffer", "--clusters", 2, "--cache", tmp_path / "cache")
+    assert res.returncode == 0, res.stderr[-3000:]
+    rep = json.loads((tmp_path / "o" / "report.json").read_text())
+    assert rep["parameters"]["drawing"]["renderer"] == "zbuffer"
+    assert len(rep["shapes"]) == len(blend_state(sample / "sample.blend")["objects"])
+    assert {s["cluster"] for s in rep["shapes"]} == {0, 1}
+    assert any(f.name.endswith(".npz") for f in (tmp_path / "cache").rglob("*"))

@@ -28,6 +28,7 @@ ROOT_PACKAGE = __package__.rsplit(".", 2)[0]
 RENDERERS = (
     ("freestyle", "Freestyle", "Faithful line drawings (Cycles + Freestyle, slower)"),
     ("lineart", "Line Art", "Fast line drawings (Grease Pencil Line Art, no suggestive contours)"),
+    ("zbuffer", "Depth Buffer", "Fastest: lines from depth buffers in numpy, no render engine"),
 )
 
 # The Advanced panel's properties: defaults and descriptions come from options.PARAMETERS, i.e.
