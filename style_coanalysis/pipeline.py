@@ -38,7 +38,7 @@ from scipy.optimize import linear_sum_assignment
 from . import graph
 from .constraints import labels_to_array, triplets_to_array, validate_labels, validate_triplets
 from .drawings import ShapeDrawings
-from .encoding import frequency_features, shared_bank, word_counts
+from .encoding import FilterBank, frequency_features, shared_bank, word_counts
 from .features import collection_maps, line_character
 from .meshes import InputError
 from .params import AnalysisParams
@@ -284,7 +284,7 @@ class Encoding:
     """A collection's encoding (`encode`): what the clustering rounds read. It depends on the
     drawings and the dictionary parameters only, so one encoding serves every mode."""
 
-    bank: object                 # encoding.FilterBank: the style words (24 px patches)
+    bank: FilterBank             # the style words (24 px patches)
     words: np.ndarray            # (N, K) word profile
     layout: np.ndarray           # (N, K') layout profile (48 px words)
     lines: np.ndarray            # (N, L) line character
@@ -363,8 +363,10 @@ def analyse(drawings: list[ShapeDrawings], params: AnalysisParams,
     bank, words, layout, lines = encoded.bank, encoded.words, encoded.layout, encoded.lines
     relative = encoded.relative
     # what a linear discriminant weighs when labels are given (_label_transduction)
-    features = np.hstack([relative, lines])
-    features = (features - features.mean(axis=0)) / (features.std(axis=0) + 1e-9)
+    features = None
+    if y is not None:
+        features = np.hstack([relative, lines])
+        features = (features - features.mean(axis=0)) / (features.std(axis=0) + 1e-9)
 
     keep = np.ones(len(bank), bool)
     prev = None
