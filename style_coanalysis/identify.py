@@ -9,6 +9,12 @@ image, drawing or view, is then encoded with the analysis' own word dictionary: 
 word is the best match of an inked window (the analysis' frequency pooling, per image). Each of a
 shape's views votes for the style of its nearest drawing (cosine), and the style with the most
 votes wins; ties go to the larger summed similarity.
+
+Where on each shape the identified style lives (`style_regions`): the dictionary words most
+characteristic of the winning style's drawings (`characteristic_words`) play the part the
+cluster's style words play in the analysis, and the windows of the shape's views that match them
+are back-projected to its faces by the analysis' own machinery (`localisation.localise_shape`,
+`regions.face_weights`).
 """
 from __future__ import annotations
 
@@ -22,6 +28,7 @@ from skimage.morphology import skeletonize
 from skimage.transform import resize
 from sklearn.preprocessing import normalize
 
+from . import localisation
 from .encoding import frequency_features, word_counts
 from .features import hog_images
 from .meshes import InputError
@@ -105,10 +112,12 @@ def load_drawings(folder) -> DrawingSet:
     return DrawingSet(images, styles, paths)
 
 
-def encode(images: np.ndarray, words: np.ndarray) -> np.ndarray:
-    """(M, K) word frequencies of each image on its own (Hellinger-mapped, unit rows)."""
-    maps = hog_images(np.asarray(images, np.float32))[:, None]       # (M, 1, by, bx, C)
-    return normalize(frequency_features(word_counts(maps, words)))
+def encode(images: np.ndarray, words: np.ndarray, maps: np.ndarray | None = None) -> np.ndarray:
+    """(M, K) word frequencies of each image on its own (Hellinger-mapped, unit rows); `maps`,
+    if given, are the images' HOG maps (M, by, bx, C), computed here otherwise."""
+    if maps is None:
+        maps = hog_images(np.asarray(images, np.float32))
+    return normalize(frequency_features(word_counts(np.asarray(maps)[:, None], words)))
 
 
 @dataclass
@@ -132,12 +141,54 @@ def vote(view_codes: np.ndarray, drawing_codes: np.ndarray, styles: list) -> Ide
     return Identification(best, votes, [int(j) for j in nearest])
 
 
-def identify(view_images, drawings: DrawingSet, words: np.ndarray) -> list[Identification]:
-    """view_images: per shape, its (V, S, S) views (1 = ink). One Identification per shape."""
+def encode_drawings(view_images, drawings: DrawingSet, words: np.ndarray) -> np.ndarray:
+    """(M, K) codes of the drawings, brought to the form of the given views (per shape (V, S, S))."""
     all_views = [im for views in view_images for im in views]
     size = np.asarray(all_views[0]).shape[-1]
-    codes = encode(drawings.images(size, ink_extent(all_views)), words)
+    return encode(drawings.images(size, ink_extent(all_views)), words)
+
+
+def identify(view_images, drawings: DrawingSet, words: np.ndarray, maps=None,
+             codes: np.ndarray | None = None) -> list[Identification]:
+    """view_images: per shape, its (V, S, S) views (1 = ink); maps: per shape its views' HOG
+    maps, if already computed. One Identification per shape."""
+    codes = encode_drawings(view_images, drawings, words) if codes is None else codes
+    return [vote(encode(views, words, None if maps is None else maps[i]), codes, drawings.styles)
+            for i, views in enumerate(view_images)]
+
+
+def characteristic_words(codes: np.ndarray, styles: list, per_style: int):
+    """(word_style (K,) int, index into sorted(set(styles)) or -1; names): each style's
+    `per_style` words most over-represented in its drawings.
+
+    A word's margin for style s is its mean code over s's drawings minus the largest mean over
+    any other style's drawings: a word common in every style's drawings (corners, straight
+    edges) has no margin and marks nothing, and only one style can have a positive margin for
+    a word, so no word marks two styles. Only the drawings decide (their labels are the user's
+    input); then the best `per_style` by margin are kept, as the analysis keeps its clusters'
+    best words (`localisation.top_words`, LocalisationParams.words_per_cluster)."""
+    names = sorted(set(styles))
+    labels = np.array([names.index(s) for s in styles])
+    means = np.stack([np.asarray(codes)[labels == k].mean(axis=0) for k in range(len(names))])
+    margin = np.empty_like(means)
+    for k in range(len(names)):
+        margin[k] = means[k] - np.delete(means, k, axis=0).max(axis=0)
+    best = margin.argmax(axis=0)
+    score = margin.max(axis=0)
+    word_style = np.where(score > 0, best, -1)
+    return localisation.top_words(word_style, score, per_style), names
+
+
+def style_regions(shape_drawings, normal_meshes, found: list, word_style: np.ndarray, names: list,
+                  words: np.ndarray, patch_size: int, threshold: float, maps=None) -> list:
+    """Per shape, the localisation.ShapeLocalisation of its identified style: the windows of
+    all its views whose best word of the whole dictionary is one of that style's characteristic
+    words, back-projected onto the faces (localise_shape). All views, not only those that voted
+    for the style: a view closer overall to another style's drawing may still show the ornament.
+    normal_meshes: the shapes in the normalised frame they were drawn in (`meshes.normalise`)."""
     out = []
-    for views in view_images:
-        out.append(vote(encode(views, words), codes, drawings.styles))
+    for i, (d, m, r) in enumerate(zip(shape_drawings, normal_meshes, found)):
+        out.append(localisation.localise_shape(
+            d, m.vertices, m.faces, words, word_style, names.index(r.style), patch_size,
+            threshold, maps=None if maps is None else maps[i]))
     return out

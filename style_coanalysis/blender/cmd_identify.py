@@ -2,9 +2,11 @@
 
 The drawings are read and checked first (a bad image is refused by name before any rendering),
 then the shapes are drawn and analysed as `analyze` does (the analysis provides the word
-dictionary both sides are encoded with, `identify.py`), and each shape's views vote. DIR gets
-identify.csv (name, style, the votes per style) and identify.json, written into a temporary
-folder that then replaces DIR whole (`options.publish`), like `analyze`.
+dictionary both sides are encoded with, `identify.py`), each shape's views vote, and the windows
+matching the words characteristic of the winning style are back-projected as its style regions.
+DIR gets identify.csv (name, style, the votes per style), identify.json and identify_regions.npz
+(per shape its regions' vertex and face weights), written into a temporary folder that then
+replaces DIR whole (`options.publish`), like `analyze`.
 """
 from __future__ import annotations
 
@@ -13,16 +15,28 @@ import io
 import json
 import os
 import sys
+from dataclasses import dataclass
+
+import numpy as np
 
 from .. import identify as ident
-from ..meshes import InputError
+from ..meshes import InputError, face_areas, normalise
 from ..options import PARAMETERS, build_options, check_output, publish
 
-CSV_NAME, JSON_NAME = "identify.csv", "identify.json"
+CSV_NAME, JSON_NAME, REGIONS_NAME = "identify.csv", "identify.json", "identify_regions.npz"
 
 
-def identify_job(meshes, options, drawings: ident.DrawingSet, progress=None):
-    """(JobResult, [Identification] in job.shapes order): the analysis, then the vote."""
+@dataclass
+class IdentifyRun:
+    job: object               # the analysis' JobResult (job.shapes: the identified shapes)
+    found: list               # Identification per shape, job.shapes order
+    regions: list             # localisation.ShapeLocalisation of the identified style, same order
+    word_style: np.ndarray    # (K,) style index (into styles) of each characteristic word, -1 else
+    styles: list              # sorted style names
+
+
+def identify_job(meshes, options, drawings: ident.DrawingSet, progress=None) -> IdentifyRun:
+    """The analysis, the vote, then each shape's identified style regions."""
     from dataclasses import replace
 
     from .job import run_steps
@@ -37,8 +51,35 @@ def identify_job(meshes, options, drawings: ident.DrawingSet, progress=None):
         except StopIteration as stop:
             job = stop.value
             break
+    from ..features import hog_images
+    words = job.analysis.words
     views = [d.images for d in job.drawings]
-    return job, ident.identify(views, drawings, job.analysis.words)
+    maps = [hog_images(d.images) for d in job.drawings]     # read by the vote and the regions
+    codes = ident.encode_drawings(views, drawings, words)
+    found = ident.identify(views, drawings, words, maps=maps, codes=codes)
+    word_style, styles = ident.characteristic_words(codes, drawings.styles,
+                                                    options.localisation.words_per_cluster)
+    by_name = {m.name: m for m in meshes}
+    normal = [normalise(by_name[s.name], options.up) for s in job.shapes]
+    regions = ident.style_regions(job.drawings, normal, found, word_style, styles, words,
+                                  options.params.patch_size,
+                                  options.localisation.match_threshold, maps=maps)
+    return IdentifyRun(job, found, regions, word_style, styles)
+
+
+def region_summary(run: IdentifyRun, meshes, options) -> list:
+    """Per shape: style-region faces (weight > 0.5) and their share of the surface area (in the
+    normalised frame, so the figure does not depend on the file's unit)."""
+    by_name = {m.name: m for m in meshes}
+    out = []
+    for shape, loc in zip(run.job.shapes, run.regions):
+        m = normalise(by_name[shape.name], options.up)
+        inside = loc.face_weights > 0.5
+        area = face_areas(m.vertices, m.faces)
+        out.append({"faces": int(inside.sum()),
+                    "area_share": round(float(area[inside].sum() / max(area.sum(), 1e-30)), 4),
+                    "best_view": int(loc.best_view)})
+    return out
 
 
 def table(job, found, drawings: ident.DrawingSet) -> str:
@@ -67,7 +108,9 @@ def run(args) -> int:
         meshes = load_input(args.input, args.collection)
         if not meshes:
             raise InputError(f"'{args.input}' contains no mesh")
-        job, found = identify_job(meshes, options, drawings, progress)
+        run = identify_job(meshes, options, drawings, progress)
+    job, found = run.job, run.found
+    summary = region_summary(run, meshes, options)
     for name, reason in job.skipped:
         print(f"warning: skipped '{name}': {reason}", file=sys.stderr)
 
@@ -75,10 +118,20 @@ def run(args) -> int:
         (folder / CSV_NAME).write_text(table(job, found, drawings), encoding="utf-8")
         (folder / JSON_NAME).write_text(json.dumps({
             "drawings": [{"path": p, "style": s} for p, s in zip(drawings.paths, drawings.styles)],
+            "characteristic_words": {s: np.flatnonzero(run.word_style == k).tolist()
+                                     for k, s in enumerate(run.styles)},
+            "regions": f"{REGIONS_NAME}: vertex_weights_<i> (object vertex order) and "
+                       "face_weights_<i> (triangles), i the shape's index here; > 0.5: region",
             "shapes": [{"name": sh.name, "style": r.style, "votes": r.votes,
-                        "nearest_drawing_per_view": [drawings.paths[j] for j in r.nearest]}
-                       for sh, r in zip(job.shapes, found)],
+                        "nearest_drawing_per_view": [drawings.paths[j] for j in r.nearest],
+                        "region": reg}
+                       for sh, r, reg in zip(job.shapes, found, summary)],
             "skipped": [{"name": n, "reason": why} for n, why in job.skipped]}, indent=1))
+        arrays = {}
+        for i, loc in enumerate(run.regions):
+            arrays[f"vertex_weights_{i}"] = loc.weights.astype(np.float32)
+            arrays[f"face_weights_{i}"] = loc.face_weights.astype(np.float32)
+        np.savez_compressed(folder / REGIONS_NAME, **arrays)
     publish(out, write)
     print(f"{len(found)} shapes identified from {len(drawings.styles)} drawings of "
           f"{len(set(drawings.styles))} styles; wrote {out}/{CSV_NAME}", file=sys.stderr)
