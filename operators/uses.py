@@ -3,7 +3,10 @@ select the shapes worth labelling next, and identify each shape's style from lab
 drawings. The first two read the style space the analysis stored in the scene (`space_store`),
 so they work after save and reload without re-drawing; they change only the selection and the
 lists the Results panel shows (scene custom properties). Identify runs its own analysis of the
-Analyse panel's target meshes and writes only `style_identified` on them."""
+Analyse panel's target meshes and writes only on them: the custom properties `style_identified`
+and `style_identified_votes`, and the vertex group `style_identified_weight` (where on the mesh
+the identified style lies, 1 = style region), after checking every object first, so an invalid
+or failed run changes nothing."""
 import json
 
 import bpy
@@ -15,6 +18,7 @@ from ..style_coanalysis.suggest import suggest
 SIMILAR_KEY = "style_similar"       # {"query": name, "ranked": [[name, distance, cluster], ...]}
 SUGGESTED_KEY = "style_suggested"   # [[name, reason], ...]
 IDENTIFIED_KEY = "style_identified"  # [[name, style, votes], ...]
+IDENTIFIED_GROUP = "style_identified_weight"
 
 
 def _space(cls, context):
@@ -122,7 +126,8 @@ class STYLE_OT_suggest_labels(bpy.types.Operator):
 
 class STYLE_OT_identify_from_drawings(bpy.types.Operator):
     """Predict each target mesh's style from a folder of labelled line drawings (one subfolder
-    per style, PNG or JPEG). Runs the analysis first: the interface waits until it is done"""
+    per style, PNG or JPEG) and mark where it lies (vertex group style_identified_weight). Runs
+    the analysis first: the interface waits until it is done"""
 
     bl_idname = "style.identify_from_drawings"
     bl_label = "Identify Style from Drawings"
@@ -154,18 +159,15 @@ class STYLE_OT_identify_from_drawings(bpy.types.Operator):
         try:
             drawings = ident.load_drawings(bpy.path.abspath(self.directory))  # checked first
             meshes, options, warnings, _ = build_job(context)
-            job, found = identify_job(meshes, options, drawings)
-        except InputError as exc:
+            run = identify_job(meshes, options, drawings)
+            write_identified(context.scene, run)
+        except (InputError, writeback.WritebackError) as exc:
             self.report({"ERROR"}, str(exc))
             return {"CANCELLED"}
         for w in warnings:
             self.report({"WARNING"}, w)
-        rows = []
-        for shape, r in zip(job.shapes, found):
-            obj = context.scene.objects[shape.name]
-            obj["style_identified"] = r.style
-            obj["style_identified_votes"] = json.dumps(r.votes)
-            rows.append([shape.name, r.style, r.votes[r.style]])
+        rows = [[shape.name, r.style, r.votes[r.style]]
+                for shape, r in zip(run.job.shapes, run.found)]
         context.scene[IDENTIFIED_KEY] = json.dumps(rows)
         counts = {}
         for _, style, _ in rows:
@@ -173,6 +175,32 @@ class STYLE_OT_identify_from_drawings(bpy.types.Operator):
         self.report({"INFO"}, f"{len(rows)} shapes identified: "
                     + ", ".join(f"{s} {n}" for s, n in sorted(counts.items())))
         return {"FINISHED"}
+
+
+def write_identified(scene, run):
+    """The identification on its objects: properties per object, the region weights as vertex
+    group IDENTIFIED_GROUP per mesh (a mesh shared by several analysed objects gets the mean of
+    their weights, as writeback does for style_weight). Every object is checked first
+    (writeback's check: present, a mesh, not linked, same vertex count), so a refusal changes
+    nothing."""
+    from collections import defaultdict
+    from types import SimpleNamespace
+
+    import numpy as np
+    shapes = [SimpleNamespace(name=s.name, vertex_weights=loc.weights)
+              for s, loc in zip(run.job.shapes, run.regions)]
+    writeback._check(scene, SimpleNamespace(shapes=shapes))
+    by_mesh = defaultdict(list)
+    for s in shapes:
+        by_mesh[scene.objects[s.name].data.name].append(s)
+    for group in by_mesh.values():
+        weights = np.mean([np.asarray(s.vertex_weights, np.float32) for s in group], axis=0)
+        writeback.set_group_weights(scene.objects[group[0].name], IDENTIFIED_GROUP,
+                                    np.clip(weights, 0.0, 1.0))
+    for shape, r in zip(run.job.shapes, run.found):
+        obj = scene.objects[shape.name]
+        obj["style_identified"] = r.style
+        obj["style_identified_votes"] = json.dumps(r.votes)
 
 
 CLASSES = (STYLE_OT_select_similar, STYLE_OT_suggest_labels, STYLE_OT_identify_from_drawings)
