@@ -9,6 +9,12 @@ drawing. Baseline: the same vote with whole-image orientation statistics (ink de
 8-bin orientation histogram, `evaluation.baselines.line_statistics`) instead of the words;
 chance = the majority style's share.
 
+Style regions: each shape's identified regions (faces with weight > 0.5; `identify.style_regions`,
+the windows matching the words characteristic of the identified style back-projected by the
+analysis' localisation) scored by area against the generator's true decorative faces, beside as
+many random faces per shape (`metrics.region_scores`, as bench/bench_localisation.py), over all
+shapes and over the correctly identified ones. Ground truth is read only here, to score.
+
     python bench/bench_identify.py --collections sample-120 collection2 --seeds 3
 """
 from __future__ import annotations
@@ -27,7 +33,9 @@ sys.path.insert(0, str(ROOT))
 
 from sklearn.preprocessing import StandardScaler  # noqa: E402
 
-from style_coanalysis import identify as I, pipeline  # noqa: E402
+from style_coanalysis import identify as I, metrics, pipeline  # noqa: E402
+from style_coanalysis.meshes import face_areas, normalise  # noqa: E402
+from style_coanalysis.params import LocalisationParams  # noqa: E402
 from style_coanalysis.evaluation import baselines  # noqa: E402
 from style_coanalysis.evaluation import benchmark as B  # noqa: E402
 from style_coanalysis.evaluation.sketches import SKETCH_SETTINGS, write_sketches  # noqa: E402
@@ -72,23 +80,48 @@ def run(name, seeds, jobs, log) -> dict:
     styles = {m.name: m.truth["style"] for m in meshes}
     truth = coll.truth["style"]
     views = [d.images for d in coll.drawings]
+    normal = [normalise(m) for m in coll.meshes]
+    areas = [face_areas(m.vertices, m.faces) for m in normal]
+    masks = [np.asarray(m.truth["face_mask"], bool) for m in coll.meshes]
+    lp = LocalisationParams()
     rows = []
     for seed in seeds:
         t0 = time.perf_counter()
         with tempfile.TemporaryDirectory() as tmp:
             write_sketches(sk, [styles[d.name] for d in sk], tmp, seed=seed)
             drawings = I.load_drawings(tmp)
-        res = pipeline.analyse(coll.drawings, AnalysisParams(random_state=seed), maps=coll.maps)
-        pred = [r.style for r in I.identify(views, drawings, res.words)]
+        params = AnalysisParams(random_state=seed)
+        res = pipeline.analyse(coll.drawings, params, maps=coll.maps)
+        codes = I.encode_drawings(views, drawings, res.words)
+        found = I.identify(views, drawings, res.words, maps=coll.maps, codes=codes)
+        pred = [r.style for r in found]
         base = orientation_vote(views, drawings)
+        t1 = time.perf_counter()
+        word_style, names = I.characteristic_words(codes, drawings.styles, lp.words_per_cluster)
+        locs = I.style_regions(coll.drawings, normal, found, word_style, names, res.words,
+                               params.patch_size, lp.match_threshold, maps=coll.maps)
+        preds = [loc.face_weights > 0.5 for loc in locs]
+        right = np.flatnonzero(np.array(pred) == truth)
+        regions = metrics.region_scores(preds, masks, areas, seed=seed)
+        regions_right = metrics.region_scores([preds[i] for i in right], [masks[i] for i in right],
+                                              [areas[i] for i in right], seed=seed)
+        t_reg = time.perf_counter() - t1
         row = {"seed": seed, "n_drawings": len(drawings.styles),
                "identify": float(np.mean(np.array(pred) == truth)),
                "orientation statistics": float(np.mean(np.array(base) == truth)),
-               "chance": B.majority_share(truth), "seconds": time.perf_counter() - t0}
+               "chance": B.majority_share(truth), "seconds": time.perf_counter() - t0,
+               "regions": {k: regions[k] for k in ("area", "random_area")},
+               "regions_correct_shapes": {k: regions_right[k] for k in ("area", "random_area")},
+               "shapes_with_region": int(sum(p.any() for p in preds)),
+               "region_seconds": t_reg}
         rows.append(row)
         log(f"  {name} seed {seed}: identify {row['identify']:.3f}, orientation statistics "
             f"{row['orientation statistics']:.3f}, chance {row['chance']:.3f} "
             f"({row['n_drawings']} drawings) [{row['seconds']:.0f} s]")
+        a, ra = regions["area"], regions["random_area"]
+        log(f"    regions by area: P {a['precision']:.3f} R {a['recall']:.3f} IoU {a['iou']:.3f} "
+            f"(random faces {ra['precision']:.3f} / {ra['recall']:.3f} / {ra['iou']:.3f}); "
+            f"{row['shapes_with_region']} of {len(preds)} shapes with a region [{t_reg:.0f} s]")
     return {"n": len(truth), "sketch_meshes": len(sk), "runs": rows}
 
 
@@ -100,6 +133,21 @@ def table(results) -> str:
                           f"{np.std([x[k] for x in r['runs']]):.3f}")
         lines.append(f"| {name} | {r['n']} | {r['runs'][0]['n_drawings']} | {cell('identify')} | "
                      f"{cell('orientation statistics')} | {r['runs'][0]['chance']:.3f} |")
+    return "\n".join(lines)
+
+
+def region_table(results) -> str:
+    """Area precision / recall / IoU of the identified regions and of random faces."""
+    lines = ["| collection | shapes | regions P | R | IoU | random faces P | R | IoU |",
+             "|---|---|---|---|---|---|---|---|"]
+    for name, r in results.items():
+        for which, label in (("regions", "all"), ("regions_correct_shapes", "correctly identified")):
+            def cell(k, m):
+                v = np.array([x[which][k][m] for x in r["runs"]])
+                return f"{v.mean():.3f} ± {v.std():.3f}"
+            lines.append(f"| {name} | {label} | " + " | ".join(
+                cell(k, m) for k in ("area", "random_area") for m in ("precision", "recall", "iou"))
+                + " |")
     return "\n".join(lines)
 
 
@@ -117,8 +165,11 @@ def main(argv=None) -> int:
     for name in args.collections:
         results[name] = run(name, range(args.seeds), args.jobs, log)
         print(table({name: results[name]}), flush=True)
+        print(region_table({name: results[name]}), flush=True)
     print(f"\naccuracy, mean ± std over seeds {', '.join(map(str, range(args.seeds)))}")
     print(table(results))
+    print("\nstyle regions by area against the true decorative faces, beside as many random faces")
+    print(region_table(results))
     Path(args.json).write_text(json.dumps(results, indent=1))
     return 0
 
