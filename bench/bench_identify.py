@@ -13,7 +13,10 @@ Style regions: each shape's identified regions (faces with weight > 0.5; `identi
 the windows matching the words characteristic of the identified style back-projected by the
 analysis' localisation) scored by area against the generator's true decorative faces, beside as
 many random faces per shape (`metrics.region_scores`, as bench/bench_localisation.py), over all
-shapes and over the correctly identified ones. Ground truth is read only here, to score.
+shapes and over the correctly identified ones. A second control, for the words rather than the
+back-projection: the same back-projection with as many words per style drawn at random from the
+dictionary (seeded), which says how much of the figure the characteristic words earn. Ground
+truth is read only here, to score.
 
     python bench/bench_identify.py --collections sample-120 collection2 --seeds 3
 """
@@ -101,6 +104,14 @@ def run(name, seeds, jobs, log) -> dict:
         locs = I.style_regions(coll.drawings, normal, found, word_style, names, res.words,
                                params.patch_size, lp.match_threshold, maps=coll.maps)
         preds = [loc.face_weights > 0.5 for loc in locs]
+        rng = np.random.default_rng(seed)
+        random_style = np.full(len(res.words), -1)
+        picked = rng.permutation(len(res.words))[:len(names) * lp.words_per_cluster]
+        random_style[picked] = np.arange(len(picked)) % len(names)
+        rand_locs = I.style_regions(coll.drawings, normal, found, random_style, names, res.words,
+                                    params.patch_size, lp.match_threshold, maps=coll.maps)
+        random_words = metrics.region_scores([loc.face_weights > 0.5 for loc in rand_locs], masks,
+                                             areas, seed=seed)
         right = np.flatnonzero(np.array(pred) == truth)
         regions = metrics.region_scores(preds, masks, areas, seed=seed)
         regions_right = metrics.region_scores([preds[i] for i in right], [masks[i] for i in right],
@@ -110,7 +121,8 @@ def run(name, seeds, jobs, log) -> dict:
                "identify": float(np.mean(np.array(pred) == truth)),
                "orientation statistics": float(np.mean(np.array(base) == truth)),
                "chance": B.majority_share(truth), "seconds": time.perf_counter() - t0,
-               "regions": {k: regions[k] for k in ("area", "random_area")},
+               "regions": {k: regions[k] for k in ("area", "random_area")}
+               | {"random_words_area": random_words["area"]},
                "regions_correct_shapes": {k: regions_right[k] for k in ("area", "random_area")},
                "shapes_with_region": int(sum(p.any() for p in preds)),
                "region_seconds": t_reg}
@@ -122,6 +134,9 @@ def run(name, seeds, jobs, log) -> dict:
         log(f"    regions by area: P {a['precision']:.3f} R {a['recall']:.3f} IoU {a['iou']:.3f} "
             f"(random faces {ra['precision']:.3f} / {ra['recall']:.3f} / {ra['iou']:.3f}); "
             f"{row['shapes_with_region']} of {len(preds)} shapes with a region [{t_reg:.0f} s]")
+        rw = random_words["area"]
+        log(f"    random words' regions by area: P {rw['precision']:.3f} R {rw['recall']:.3f} "
+            f"IoU {rw['iou']:.3f}")
     return {"n": len(truth), "sketch_meshes": len(sk), "runs": rows}
 
 
@@ -138,16 +153,19 @@ def table(results) -> str:
 
 def region_table(results) -> str:
     """Area precision / recall / IoU of the identified regions and of random faces."""
-    lines = ["| collection | shapes | regions P | R | IoU | random faces P | R | IoU |",
-             "|---|---|---|---|---|---|---|---|"]
+    lines = ["| collection | shapes | regions | precision | recall | IoU |", "|---|---|---|---|---|---|"]
     for name, r in results.items():
-        for which, label in (("regions", "all"), ("regions_correct_shapes", "correctly identified")):
-            def cell(k, m):
-                v = np.array([x[which][k][m] for x in r["runs"]])
-                return f"{v.mean():.3f} ± {v.std():.3f}"
-            lines.append(f"| {name} | {label} | " + " | ".join(
-                cell(k, m) for k in ("area", "random_area") for m in ("precision", "recall", "iou"))
-                + " |")
+        for which, label, kinds in (
+                ("regions", "all", (("area", "identified"), ("random_area", "random faces"),
+                                    ("random_words_area", "random words"))),
+                ("regions_correct_shapes", "correctly identified",
+                 (("area", "identified"), ("random_area", "random faces")))):
+            for k, what in kinds:
+                def cell(m):
+                    v = np.array([x[which][k][m] for x in r["runs"]])
+                    return f"{v.mean():.3f} ± {v.std():.3f}"
+                lines.append(f"| {name} | {label} | {what} | "
+                             + " | ".join(cell(m) for m in ("precision", "recall", "iou")) + " |")
     return "\n".join(lines)
 
 
