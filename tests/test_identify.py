@@ -75,3 +75,18 @@ def test_each_view_votes_for_its_nearest_drawing():
     assert r.nearest == [0, 0, 2] and r.votes == {"x": 2, "y": 1} and r.style == "x"
     r = vote(np.array([[1.0, 0, 0], [0, 0.5, 0]]), drawings, styles)      # 1-1: the stronger
     assert r.style == "x"
+
+
+def test_characteristic_words_are_over_represented_in_one_style_only():
+    from style_coanalysis.identify import characteristic_words
+    # words: 0 frequent in a only, 1 in every style alike, 2 frequent in b only, 3 in a and b
+    # alike (characteristic of neither), 4 a little more frequent in a than elsewhere
+    base = np.array([0.1, 0.8, 0.1, 0.1, 0.1])
+    codes = np.stack([base + [0.7, 0, 0, 0.5, 0.2], base + [0.6, 0, 0, 0.5, 0.2],
+                      base + [0, 0, 0.6, 0.5, 0], base + [0, 0, 0.7, 0.5, 0], base, base])
+    styles = ["a", "a", "b", "b", "c", "c"]
+    word_style, names = characteristic_words(codes, styles, per_style=2)
+    assert names == ["a", "b", "c"]
+    assert word_style.tolist() == [0, -1, 1, -1, 0]       # c has no word of its own
+    word_style, _ = characteristic_words(codes, styles, per_style=1)
+    assert word_style.tolist() == [0, -1, 1, -1, -1]      # the larger margin is kept
