@@ -19,6 +19,7 @@ dictionary (seeded), which says how much of the figure the characteristic words 
 truth is read only here, to score.
 
     python bench/bench_identify.py --collections sample-120 collection2 --seeds 3
+    python bench/bench_identify.py --collections sample-24 --seeds 1 --picture docs/identify_regions.png
 """
 from __future__ import annotations
 
@@ -75,7 +76,45 @@ def orientation_vote(view_images, drawings: I.DrawingSet) -> list[str]:
     return out
 
 
-def run(name, seeds, jobs, log) -> dict:
+def picture(coll, found, locs, path, n=3):
+    """Correctly identified shapes of different styles, each in its best view: the drawing, the
+    identified regions (faces with weight > 0.5, orange) and the true decorative faces."""
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    from style_coanalysis import regions as R
+    truth = coll.truth["style"]
+    pick = []
+    for i, r in enumerate(found):
+        if r.style == truth[i] and truth[i] not in [truth[j] for j in pick]:
+            pick.append(i)
+    pick = pick[:n]
+    fig, axes = plt.subplots(len(pick), 3, figsize=(7.5, 2.6 * len(pick)), squeeze=False)
+    for row, i in enumerate(pick):
+        d, m, loc = coll.drawings[i], normalise(coll.meshes[i]), locs[i]
+        v = loc.best_view
+        buf = R.face_buffers(m.vertices, m.faces, d.cameras[v:v + 1], d.images.shape[-1])[0][0]
+        ink = d.images[v] > 0.5
+
+        def paint(mask):
+            img = np.ones(buf.shape + (3,))
+            img[buf >= 0] = (0.85, 0.85, 0.85)
+            img[(buf >= 0) & mask[np.maximum(buf, 0)]] = (1.0, 0.55, 0.1)
+            img[ink] = 0
+            return img
+        axes[row, 0].imshow(1 - ink, cmap="gray")
+        axes[row, 0].set_title(f"{coll.meshes[i].name}\nview {v}", fontsize=8)
+        axes[row, 1].imshow(paint(loc.face_weights > 0.5))
+        axes[row, 1].set_title(f"identified '{found[i].style}': regions", fontsize=8)
+        axes[row, 2].imshow(paint(np.asarray(coll.meshes[i].truth["face_mask"], bool)))
+        axes[row, 2].set_title("true decorative faces", fontsize=8)
+        for a in axes[row]:
+            a.axis("off")
+    fig.tight_layout()
+    fig.savefig(path, dpi=90)
+
+
+def run(name, seeds, jobs, log, picture_path=None) -> dict:
     from style_coanalysis.blender.batch import draw_collection
     coll = B.load_collection(name, jobs=jobs, log=log)
     meshes = sketch_meshes(name)
@@ -117,6 +156,8 @@ def run(name, seeds, jobs, log) -> dict:
         regions_right = metrics.region_scores([preds[i] for i in right], [masks[i] for i in right],
                                               [areas[i] for i in right], seed=seed)
         t_reg = time.perf_counter() - t1
+        if picture_path and seed == seeds[0]:
+            picture(coll, found, locs, picture_path)
         row = {"seed": seed, "n_drawings": len(drawings.styles),
                "identify": float(np.mean(np.array(pred) == truth)),
                "orientation statistics": float(np.mean(np.array(base) == truth)),
@@ -175,13 +216,15 @@ def main(argv=None) -> int:
     ap.add_argument("--seeds", type=int, default=3)
     ap.add_argument("--jobs", type=int, default=1)
     ap.add_argument("--json", default=str(ROOT / "bench" / "results" / "identify.json"))
+    ap.add_argument("--picture", help="PNG of a few shapes' regions (first collection, first seed)")
     args = ap.parse_args(argv)
 
     def log(msg):
         print(msg, file=sys.stderr, flush=True)
     results = {}
     for name in args.collections:
-        results[name] = run(name, range(args.seeds), args.jobs, log)
+        results[name] = run(name, range(args.seeds), args.jobs, log,
+                            args.picture if name == args.collections[0] else None)
         print(table({name: results[name]}), flush=True)
         print(region_table({name: results[name]}), flush=True)
     print(f"\naccuracy, mean ± std over seeds {', '.join(map(str, range(args.seeds)))}")
