@@ -42,6 +42,8 @@ import numpy as np
 from numpy.lib.stride_tricks import sliding_window_view
 from sklearn.cluster import KMeans
 
+from .features import CHANNELS, patch_blocks, patch_descriptors
+
 EPS = 1e-6
 
 
@@ -111,31 +113,74 @@ def canonical_order(desc: np.ndarray) -> np.ndarray:
     return np.argsort(content_keys(desc), kind="stable")
 
 
-def shared_bank(view_maps: np.ndarray, shape: np.ndarray, view: np.ndarray, seed: np.ndarray,
+class DescriptorDraw:
+    """The patch descriptors a dictionary is drawn from, gathered one shape at a time.
+
+    Non-blank descriptors only, at most `limit` of them, drawn by content (the smallest
+    `content_keys`), not by position: a patch more or less (a seed that moved when the
+    coordinates changed by 1e-7) changes the draw by that patch only, the order of the shapes
+    does not matter, and a collection of any size holds at most 2 x `limit` descriptors."""
+
+    def __init__(self, size: int, limit: int = 20000, salt: int = 1):
+        self.size, self.limit, self.salt = size, limit, salt
+        self._parts: list[tuple] = []
+        self._count = 0
+
+    def add(self, maps: np.ndarray, shape: int, view: np.ndarray, seed: np.ndarray,
+            centre: np.ndarray) -> None:
+        """Patches of one shape: its maps (V, by, bx, C), and per patch its view, seed, centre."""
+        view = np.asarray(view, np.int64)
+        if len(view) == 0:
+            return
+        desc, _ = patch_descriptors(maps, view, centre, self.size)
+        ok = desc.reshape(len(desc), -1).max(axis=1) > EPS
+        if not ok.any():
+            return
+        desc = desc[ok]
+        self._parts.append((content_keys(desc, self.salt), desc, np.full(len(desc), shape),
+                            view[ok], np.asarray(seed, np.int64)[ok],
+                            np.asarray(centre, np.float32)[ok]))
+        self._count += len(desc)
+        if self._count > 2 * self.limit:
+            self._prune()
+
+    def _prune(self) -> None:
+        keys, *rest = (np.concatenate(c) for c in zip(*self._parts))
+        keep = np.argsort(keys, kind="stable")[:self.limit]
+        self._parts = [(keys[keep], *(r[keep] for r in rest))]
+        self._count = len(keep)
+
+    def bank(self, k: int, random_state: int = 0) -> FilterBank:
+        """`k` representative patches of the drawn descriptors, in canonical order (k-means;
+        each centre replaced by its nearest real patch). `bank.view` is the view the patch was
+        cut from (for back-projection), not a restriction."""
+        if self._count > self.limit:
+            self._prune()
+        if not self._parts:
+            nb = patch_blocks(self.size)
+            return FilterBank(np.zeros((0, nb, nb, CHANNELS), np.float32), np.zeros(0, np.int64),
+                              np.zeros(0, np.int64), np.zeros(0, np.int64),
+                              np.zeros((0, 2), np.float32))
+        _, desc, shape, view, seed, centre = (np.concatenate(c) for c in zip(*self._parts))
+        order = canonical_order(desc)
+        pick = order[representatives(desc[order], k, random_state)]
+        hogs = unit_rows(desc[pick]).reshape(desc[pick].shape)
+        return FilterBank(hogs.astype(np.float32), view[pick], shape[pick], seed[pick],
+                          centre[pick])
+
+
+def shared_bank(view_maps, shape: np.ndarray, view: np.ndarray, seed: np.ndarray,
                 centre: np.ndarray, size: int, k: int, random_state: int = 0,
                 max_descriptors: int = 20000) -> FilterBank:
-    """`k` representative patches of all views together (k-means on at most `max_descriptors`
-    non-blank patch descriptors drawn by content, in canonical order; each centre replaced by
-    its nearest real patch).
-    `bank.view` is the view the patch was cut from (for back-projection), not a restriction."""
-    from .features import patch_descriptors
-
-    n_shapes, n_views = view_maps.shape[:2]
+    """`k` representative patches of all views together, from the patches listed by shape, view,
+    seed and centre over `view_maps` (a sequence of per-shape maps (V, by, bx, C)): a
+    `DescriptorDraw` fed shape by shape."""
+    draw = DescriptorDraw(size, max_descriptors, 1 + random_state)
     shape = np.asarray(shape, np.int64)
-    view = np.asarray(view, np.int64)
-    flat = view_maps.reshape(n_shapes * n_views, *view_maps.shape[2:])
-    desc, _ = patch_descriptors(flat, shape * n_views + view, centre, size)
-    ok = np.flatnonzero(desc.reshape(len(desc), -1).max(axis=1) > EPS) if len(desc) else \
-        np.zeros(0, np.int64)
-    if len(ok) > max_descriptors:
-        # a draw by content, not by position: a patch more or less (a seed that moved when the
-        # coordinates changed by 1e-7) changes the draw by that patch only
-        ok = ok[np.argsort(content_keys(desc[ok], 1 + random_state), kind="stable")[:max_descriptors]]
-    ok = ok[canonical_order(desc[ok])]
-    pick = ok[representatives(desc[ok], k, random_state)] if len(ok) else ok
-    hogs = unit_rows(desc[pick]).reshape(desc[pick].shape) if len(pick) else desc[:0]
-    return FilterBank(hogs.astype(np.float32), view[pick], shape[pick],
-                      np.asarray(seed, np.int64)[pick], np.asarray(centre, np.float32)[pick])
+    for s in np.unique(shape):
+        at = shape == s
+        draw.add(view_maps[s], int(s), view[at], seed[at], centre[at])
+    return draw.bank(k, random_state)
 
 
 def word_assignments(maps: np.ndarray, filters: np.ndarray, ink: float = 0.5):

@@ -19,6 +19,8 @@ crops with the same settings, for matching patches from elsewhere against filter
 """
 from __future__ import annotations
 
+import tempfile
+
 import numpy as np
 from skimage.feature import hog
 
@@ -60,6 +62,40 @@ def collection_maps(drawings, step=None) -> np.ndarray:
             step(i, len(drawings))
         maps.append(hog_images(d.images))
     return np.stack(maps)
+
+
+class MapStore:
+    """Every shape's HOG maps in a temporary file, read back one shape at a time.
+
+    A shape's maps take 1 MB (12 views of 200 px), so a collection of 5,000 would need 5 GB held
+    at once; here they need disk space only, and the file goes when the store is closed or
+    collected. Indexable like the (N, V, by, bx, C) array it replaces."""
+
+    def __init__(self, directory: str | None = None):
+        self._file = tempfile.TemporaryFile(dir=directory)
+        self._offsets: list[int] = []
+        self._shape: tuple | None = None
+
+    def append(self, maps: np.ndarray) -> None:
+        maps = np.ascontiguousarray(maps, np.float32)
+        if self._shape is None:
+            self._shape = maps.shape
+        elif maps.shape != self._shape:
+            raise ValueError(f"maps of shape {maps.shape}, the store holds {self._shape}")
+        self._file.seek(0, 2)
+        self._offsets.append(self._file.tell())
+        self._file.write(maps.tobytes())
+
+    def __len__(self) -> int:
+        return len(self._offsets)
+
+    def __getitem__(self, i: int) -> np.ndarray:
+        self._file.seek(self._offsets[i])
+        data = self._file.read(int(np.prod(self._shape)) * 4)
+        return np.frombuffer(data, np.float32).reshape(self._shape)
+
+    def close(self) -> None:
+        self._file.close()
 
 
 def patch_blocks(size: int) -> int:

@@ -7,53 +7,87 @@ views' graphs keeps an edge strong only where several views make it, so what the
 dominates the cut; the spectral cut then needs no assumption on cluster shape. Measured against
 PSLF, concatenation and single views on every benchmark collection (README table).
 
-Each view's graph is the local-scaling affinity of self-tuning spectral clustering (Zelnik-Manor
-and Perona 2004): A_ij = exp(-d_ij^2 / (s_i s_j)), s_i the distance to the i-th shape's 7th
-neighbour (their value), so dense and sparse parts of a view are treated alike.
+Each view's graph links every shape to its `N_EDGES` nearest shapes (and theirs to it), with the
+local-scaling affinity of self-tuning spectral clustering (Zelnik-Manor and Perona 2004):
+A_ij = exp(-d_ij^2 / (s_i s_j)), s_i the distance to the i-th shape's 7th neighbour (their
+value), so dense and sparse parts of a view are treated alike. Why a sparse graph: beyond its
+nearest shapes a shape's affinities only order shapes that are not alike, which the cut should
+not read, and a dense graph costs N^2 memory and an N^3 eigensolver (5,000 shapes: 200 MB per
+view). Measured on one round of 22 cached encodings (k given, style purity, mean): every shape
+linked to all 0.695, to its 40 nearest 0.707, 30 nearest 0.706, 20 nearest 0.714 (sample-styles-3
+0.71 -> 0.88, sample-cats-2 0.71 -> 0.81, collection2 0.63 -> 0.57). The graph is built in row
+blocks, so memory grows with N, not N^2.
 
-Order of the input: every step is equivariant to a permutation of the shapes except k-means'
-initialisation, so k-means runs on the rows in a canonical order (sorted by their rounded
-values) and its answer is mapped back: the same shapes give the same partition whatever order
-they were read in.
+Order of the input: every step is equivariant to a permutation of the shapes (a neighbour tied
+with the last one kept is kept too) except k-means' initialisation, so k-means runs on the rows
+in a canonical order (sorted by their rounded values) and its answer is mapped back: the same
+shapes give the same partition whatever order they were read in.
 """
 from __future__ import annotations
 
 import numpy as np
+from scipy import sparse
 from scipy.linalg import eigh
+from scipy.sparse.linalg import eigsh
 from sklearn.cluster import KMeans
 from sklearn.metrics import pairwise_distances
 from sklearn.preprocessing import normalize
 
-K_NEIGHBOURS = 7
+K_NEIGHBOURS = 7          # the local scale: distance to the 7th neighbour (Zelnik-Manor, Perona)
+N_EDGES = 20              # each shape's edges in a view's graph: its nearest shapes
+BLOCK = 256               # rows of the distance matrix held at once
+DENSE_BELOW = 300         # smaller graphs are solved densely (exact, and faster there)
 
 
-def affinity(x: np.ndarray, k_neighbours: int = K_NEIGHBOURS) -> np.ndarray:
-    """Local-scaling affinity of the rows of x: (N, N), zero diagonal."""
-    d2 = pairwise_distances(np.asarray(x, np.float64), metric="sqeuclidean")
-    n = len(d2)
+def affinity(x: np.ndarray, k_neighbours: int = K_NEIGHBOURS,
+             n_edges: int = N_EDGES) -> sparse.csr_matrix:
+    """Local-scaling affinity of the rows of x between each row and its `n_edges` nearest rows
+    (and every row tied with the last of them), symmetrised: (N, N) sparse, zero diagonal."""
+    x = np.asarray(x, np.float64)
+    n = len(x)
     k = min(k_neighbours, n - 1)
-    sigma = np.sqrt(np.maximum(np.sort(d2, axis=1)[:, k], 1e-24))
-    a = np.exp(-d2 / np.outer(sigma, sigma))
-    np.fill_diagonal(a, 0.0)
-    return a
+    m = min(max(n_edges, k), n - 1)
+    rows, cols, d2s = [], [], []
+    sigma = np.empty(n)
+    for start in range(0, n, BLOCK):
+        stop = min(n, start + BLOCK)
+        d2 = pairwise_distances(x[start:stop], x, metric="sqeuclidean")
+        d2[np.arange(stop - start), np.arange(start, stop)] = np.inf      # not its own neighbour
+        part = np.partition(d2, [k - 1, m - 1], axis=1)
+        sigma[start:stop] = np.sqrt(np.maximum(part[:, k - 1], 1e-24))
+        r, c = np.nonzero(d2 <= part[:, m - 1:m])
+        rows.append(r + start)
+        cols.append(c)
+        d2s.append(d2[r, c])
+    r, c, d2 = np.concatenate(rows), np.concatenate(cols), np.concatenate(d2s)
+    a = sparse.csr_matrix((np.exp(-d2 / (sigma[r] * sigma[c])), (r, c)), shape=(n, n))
+    return a.maximum(a.T).tocsr()
 
 
-def fuse(graphs: list[np.ndarray], weights=None) -> np.ndarray:
+def fuse(graphs: list, weights=None) -> sparse.csr_matrix:
     """Weighted mean of the views' graphs (uniform weights by default)."""
     w = np.full(len(graphs), 1.0 / len(graphs)) if weights is None else \
         np.asarray(weights, np.float64) / max(float(np.sum(weights)), 1e-12)
-    return np.tensordot(w, np.stack(graphs), axes=1)
+    out = sparse.csr_matrix(graphs[0].shape)
+    for wi, g in zip(w, graphs):
+        out = out + wi * sparse.csr_matrix(g)
+    return out.tocsr()
 
 
-def embedding(a: np.ndarray, n_vectors: int) -> tuple[np.ndarray, np.ndarray]:
-    """Top eigenvalues (descending) and eigenvectors of the normalised affinity D^-1/2 A D^-1/2."""
-    d = a.sum(axis=1)
-    dinv = 1.0 / np.sqrt(np.maximum(d, 1e-12))
-    sym = a * dinv[:, None] * dinv[None, :]
-    n = len(a)
+def embedding(a, n_vectors: int) -> tuple[np.ndarray, np.ndarray]:
+    """Top eigenvalues (descending) and eigenvectors of the normalised affinity D^-1/2 A D^-1/2
+    (dense solver for small graphs, Lanczos (ARPACK) from a fixed start for large ones)."""
+    a = sparse.csr_matrix(a)
+    n = a.shape[0]
+    dinv = sparse.diags(1.0 / np.sqrt(np.maximum(np.asarray(a.sum(axis=1)).ravel(), 1e-12)))
+    sym = (dinv @ a @ dinv).tocsr()
     m = int(min(n_vectors, n))
-    w, u = eigh(sym, subset_by_index=[n - m, n - 1])
-    w, u = w[::-1], u[:, ::-1]
+    if n < DENSE_BELOW or m >= n - 1:
+        w, u = eigh(sym.toarray(), subset_by_index=[n - m, n - 1])
+    else:
+        w, u = eigsh(sym, k=m, which="LA", v0=np.ones(n))
+    order = np.argsort(-w, kind="stable")
+    w, u = w[order], u[:, order]
     # an eigenvector's sign is arbitrary: fix it by its largest entry, so the coordinates (and
     # the canonical order k-means runs in) depend on the shapes only
     big = u[np.argmax(np.abs(u), axis=0), np.arange(u.shape[1])]
@@ -76,21 +110,21 @@ def kmeans(x: np.ndarray, n_clusters: int, random_state: int = 0) -> np.ndarray:
     return out
 
 
-def partition(a: np.ndarray, n_clusters: int, random_state: int = 0) -> np.ndarray:
+def partition(a, n_clusters: int, random_state: int = 0) -> np.ndarray:
     """Spectral cut of the graph into n_clusters (Ng-Jordan-Weiss: k-means on unit rows of the
     top eigenvectors)."""
     if n_clusters <= 1:
-        return np.zeros(len(a), np.int64)
+        return np.zeros(a.shape[0], np.int64)
     _, u = embedding(a, n_clusters)
     return kmeans(normalize(u), n_clusters, random_state)
 
 
-def choose_n_clusters(a: np.ndarray, max_clusters: int) -> int:
+def choose_n_clusters(a, max_clusters: int) -> int:
     """The number of clusters at the largest gap of the normalised affinity's spectrum (2..max).
 
     Eigenvalue k of the normalised affinity is near 1 for each of k well-separated groups; the
     first big drop after it marks how many there are."""
-    n = len(a)
+    n = a.shape[0]
     top = int(max(2, min(max_clusters, n - 1)))
     w, _ = embedding(a, top + 1)
     gaps = w[1:top] - w[2:top + 1]          # gap after eigenvalue k, for k = 2..top

@@ -318,7 +318,9 @@ def analyse_paper(drawings: list[ShapeDrawings], params: AnalysisParams,
                   cancel=None, maps: np.ndarray | None = None) -> AnalysisResult:
     """Cluster shapes by style with the paper's method (sections 3-4.5), see the module docstring.
 
-    `maps`: the drawings' HOG maps (N, V, by, bx, C) if the caller has them; computed otherwise.
+    `maps`: the drawings' HOG maps (N, V, by, bx, C), or a sequence of each shape's, if the
+    caller has them; computed otherwise. The paper's method holds every map at once (it
+    convolves all shapes' view v with view v's filters).
     """
     timings: dict[str, float] = {}
     prog = Progress.wrap(progress, cancel)
@@ -342,7 +344,7 @@ def analyse_paper(drawings: list[ShapeDrawings], params: AnalysisParams,
         t = time.perf_counter()
         maps = collection_maps(drawings, lambda i, total: prog.step("hog", i, total))
         timings["hog"] = time.perf_counter() - t
-    maps = np.asarray(maps, np.float32)
+    maps = np.stack([np.asarray(maps[i], np.float32) for i in range(len(maps))])
     if maps.shape[:2] != (n, n_views):
         raise InputError(f"HOG maps for {maps.shape[:2]} (shapes, views), expected {(n, n_views)}")
 

@@ -25,7 +25,9 @@ stable) but each stage is made to hold on collections it was not tuned on:
   those only. The loop stops when neither clusters nor words change, on a repeated state, or
   after `params.max_rounds`.
 Every order-dependent step runs in a canonical order, so the file order does not change the
-result. Nothing here reads ground truth.
+result. Nothing here reads ground truth. Nothing holds every shape's HOG maps or an N x N array:
+`encode` reads the shapes one at a time, the look-alike means are taken in row blocks, and the
+graphs are sparse (graph.py), so memory grows linearly with the collection.
 """
 from __future__ import annotations
 
@@ -38,14 +40,14 @@ from scipy.optimize import linear_sum_assignment
 from . import graph
 from .constraints import labels_to_array, triplets_to_array, validate_labels, validate_triplets
 from .drawings import ShapeDrawings
-from .encoding import FilterBank, frequency_features, shared_bank, word_counts
-from .features import collection_maps, line_character
+from .encoding import DescriptorDraw, FilterBank, frequency_features, word_counts
+from .features import MapStore, hog_images, line_character
 from .meshes import InputError
 from .params import AnalysisParams
 from .patches import extract_patches
 from .progress import Progress
 from .reselection import reselect
-from .views import fusion_views, neighbour_ladder, structure_relative
+from .views import fusion_views, look_alikes, neighbour_ladder, structure_relative
 
 FUSIONS = ("graph", "pslf", "concat", "pca", "cca")
 
@@ -252,7 +254,7 @@ def _cluster(a, features, params, y, trip, n_clusters):
     if y is not None:
         n_cls = int(y.max()) + 1
         clusters, dist = _label_transduction(a, features, y, n_cls, rs)
-        conf = dist[np.arange(len(a)), clusters] / np.maximum(dist.sum(axis=1), 1e-12)
+        conf = dist[np.arange(a.shape[0]), clusters] / np.maximum(dist.sum(axis=1), 1e-12)
         conf[y >= 0] = 1.0
         return clusters, np.clip(conf, 0, 1), n_cls
     if trip is not None:
@@ -288,51 +290,74 @@ class Encoding:
     words: np.ndarray            # (N, K) word profile
     layout: np.ndarray           # (N, K') layout profile (48 px words)
     lines: np.ndarray            # (N, L) line character
+    neighbours: np.ndarray       # (N, k) structural look-alikes, nearest first (views.look_alikes)
     relative: np.ndarray         # (N, K) word profile relative to look-alikes, mean over ladder
     timings: dict = field(default_factory=dict)
 
 
-def encode(drawings: list[ShapeDrawings], params: AnalysisParams, maps: np.ndarray | None = None,
-           progress=None) -> Encoding:
-    """Patches -> HOG maps -> dictionaries -> word, layout and line profiles of every shape."""
+def encode(drawings, params: AnalysisParams, maps=None, progress=None) -> Encoding:
+    """Patches -> HOG maps -> dictionaries -> word, layout and line profiles of every shape.
+
+    Two passes over the shapes, one shape at a time, so memory does not grow with the HOG maps:
+    1. each shape's maps (kept in a temporary `MapStore` unless `maps`, a sequence of per-shape
+       maps, is given), its line character, and its inked patches offered to the two
+       dictionary draws (`DescriptorDraw`: a bounded draw by content);
+    2. the dictionaries (k-means), then each shape's word and layout profiles from its maps.
+    `drawings` may be any sequence of ShapeDrawings, read in order, one at a time."""
     prog = Progress.wrap(progress)
-    timings: dict[str, float] = {}
-    t = time.perf_counter()
-    prog.step("patches", 0, 1)
-    patches = extract_patches(drawings, size=params.patch_size)
-    if len(patches) == 0:
-        raise InputError("no patch with ink in any drawing: the shapes drew no lines")
-    timings["patches"] = time.perf_counter() - t
-
-    if maps is None:
-        t = time.perf_counter()
-        maps = collection_maps(drawings, lambda i, total: prog.step("hog", i, total))
-        timings["hog"] = time.perf_counter() - t
-
-    t = time.perf_counter()
-    prog.step("representatives", 0, 1)
+    n = len(drawings)
     rs = params.random_state
-    bank = shared_bank(maps, patches.shape, patches.view, patches.seed, patches.centre,
-                       params.patch_size, params.n_words, rs)
-    layout_bank = shared_bank(maps, patches.shape, patches.view, patches.seed, patches.centre,
-                              params.structure_patch_size, params.n_representatives, rs + 1)
-    timings["representatives"] = time.perf_counter() - t
-    if len(bank) == 0:
-        raise InputError("no patch with ink in any drawing: the shapes drew no lines")
+    timings = {"patches": 0.0, "hog": 0.0}
+    store = MapStore() if maps is None else None
+    try:
+        draws = (DescriptorDraw(params.patch_size, salt=1 + rs),
+                 DescriptorDraw(params.structure_patch_size, salt=2 + rs))
+        lines, n_patches = [], 0
+        for i, d in enumerate(drawings):
+            prog.step("hog", i, n)
+            t = time.perf_counter()
+            if store is not None:
+                store.append(hog_images(d.images))
+            m = (store if store is not None else maps)[i]
+            timings["hog"] += time.perf_counter() - t
+            t = time.perf_counter()
+            p = extract_patches([d], size=params.patch_size)
+            n_patches += len(p)
+            for draw in draws:
+                draw.add(m, i, p.view, p.seed, p.centre)
+            lines.append(line_character(m))
+            timings["patches"] += time.perf_counter() - t
+        if n_patches == 0:
+            raise InputError("no patch with ink in any drawing: the shapes drew no lines")
 
-    t = time.perf_counter()
-    prog.step("encode", 0, 3)
-    words = frequency_features(word_counts(maps, bank.hog))
-    prog.step("encode", 1, 3)
-    layout = frequency_features(word_counts(maps, layout_bank.hog))
-    prog.step("encode", 2, 3)
-    lines = np.stack([line_character(m) for m in maps])
+        t = time.perf_counter()
+        prog.step("representatives", 0, 1)
+        bank = draws[0].bank(params.n_words, rs)
+        layout_bank = draws[1].bank(params.n_representatives, rs + 1)
+        timings["representatives"] = time.perf_counter() - t
+        if len(bank) == 0:
+            raise InputError("no patch with ink in any drawing: the shapes drew no lines")
+
+        t = time.perf_counter()
+        counts = np.zeros((n, len(bank)))
+        layout_counts = np.zeros((n, len(layout_bank)))
+        for i in range(n):
+            prog.step("encode", i, n)
+            m = (store if store is not None else maps)[i][None]
+            counts[i] = word_counts(m, bank.hog).sum(axis=1)[0]
+            layout_counts[i] = word_counts(m, layout_bank.hog).sum(axis=1)[0]
+    finally:
+        if store is not None:
+            store.close()
+    words = frequency_features(counts[:, None])
+    layout = frequency_features(layout_counts[:, None])
     # what reselection scores a word by: how much more of it a shape has than its look-alikes,
     # averaged over the ladder's scales
-    relative = np.mean([structure_relative(words, layout, k) for k in
-                        neighbour_ladder(len(words))], axis=0)
+    ks = neighbour_ladder(n)
+    neighbours = look_alikes(layout, max([k for k in ks if k < n - 1], default=0))
+    relative = np.mean(structure_relative(words, neighbours, ks), axis=0)
     timings["encode"] = time.perf_counter() - t
-    return Encoding(bank, words, layout, lines, relative, timings)
+    return Encoding(bank, words, layout, np.stack(lines), neighbours, relative, timings)
 
 
 def analyse(drawings: list[ShapeDrawings], params: AnalysisParams,
@@ -341,7 +366,7 @@ def analyse(drawings: list[ShapeDrawings], params: AnalysisParams,
             encoded: Encoding | None = None) -> AnalysisResult:
     """Cluster shapes by style and find their style words (unsupervised, labels or triplets).
 
-    `maps`: the drawings' HOG maps (N, V, by, bx, C) when the caller already has them (the job
+    `maps`: the drawings' HOG maps (a sequence of (V, by, bx, C)) when the caller has them (the job
     reuses them to find style regions); computed here otherwise. `encoded`: the collection's
     `encode` with the same drawings and parameters, when the caller runs several analyses of
     one collection (the benchmark's modes). `fusion` replaces the style graph's fusion for
@@ -360,8 +385,7 @@ def analyse(drawings: list[ShapeDrawings], params: AnalysisParams,
     if encoded is None:
         encoded = encode(drawings, params, maps, prog)
     timings = dict(encoded.timings)
-    bank, words, layout, lines = encoded.bank, encoded.words, encoded.layout, encoded.lines
-    relative = encoded.relative
+    bank, words, lines, relative = encoded.bank, encoded.words, encoded.lines, encoded.relative
     # what a linear discriminant weighs when labels are given (_label_transduction)
     features = None
     if y is not None:
@@ -374,7 +398,8 @@ def analyse(drawings: list[ShapeDrawings], params: AnalysisParams,
     for r in range(max(1, params.max_rounds)):
         t = time.perf_counter()
         prog.step("fuse", r, params.max_rounds)
-        views, view_names = fusion_views(words[:, keep], layout, lines, params.n_style_dims)
+        views, view_names = fusion_views(words[:, keep], encoded.neighbours, lines,
+                                         params.n_style_dims)
         a, weights = _style_graph(views, params, y, fusion)
         timings["fuse"] = timings.get("fuse", 0.0) + time.perf_counter() - t
 

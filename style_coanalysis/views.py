@@ -24,9 +24,10 @@ from __future__ import annotations
 
 import numpy as np
 from sklearn.decomposition import PCA
-from sklearn.neighbors import NearestNeighbors
+from sklearn.metrics import pairwise_distances
 
 MIN_NEIGHBOURS = 4        # the smallest rung: fewer look-alikes estimate a mean profile from noise
+BLOCK = 256               # rows of the distance matrix held at once
 
 
 def neighbour_ladder(n: int) -> list[int]:
@@ -38,25 +39,50 @@ def neighbour_ladder(n: int) -> list[int]:
     return ks
 
 
-def structure_relative(words: np.ndarray, layout: np.ndarray, k: int) -> np.ndarray:
-    """Each shape's word profile minus the mean profile of its k nearest structural neighbours.
+def look_alikes(layout: np.ndarray, k: int) -> np.ndarray:
+    """(N, k) each shape's k nearest structural neighbours (nearest first, itself excluded).
 
-    `layout`: the shapes' profiles over large (layout-scale) patches, standardised here. With
-    k >= n-1 this is plain centring on the collection mean. Ties in distance break by the
-    neighbours' layout values, not their position in the list, so the order of the input does
-    not matter."""
-    words = np.asarray(words, np.float64)
-    n = len(words)
-    if k >= n - 1:
-        return words - words.mean(axis=0)
+    `layout`: the shapes' profiles over large (layout-scale) patches, standardised here. Built in
+    row blocks, so memory grows with N*k, not N^2 times the profile length; ties in distance
+    break by position (tied shapes are exact duplicates, whose profiles are equal)."""
     s = np.asarray(layout, np.float64)
     s = (s - s.mean(axis=0)) / (s.std(axis=0) + 1e-9)
-    nn = NearestNeighbors(n_neighbors=k + 1).fit(s).kneighbors(s, return_distance=False)
-    own = nn == np.arange(n)[:, None]
-    # drop the shape itself (or, if duplicates pushed it out, the farthest neighbour)
-    keep = np.where(own.any(axis=1, keepdims=True), ~own, np.arange(k + 1) < k)
-    idx = nn[keep].reshape(n, k)
-    return words - words[idx].mean(axis=1)
+    n = len(s)
+    k = int(min(k, n - 1))
+    out = np.empty((n, k), np.int64)
+    for start in range(0, n, BLOCK):
+        stop = min(n, start + BLOCK)
+        d2 = pairwise_distances(s[start:stop], s, metric="sqeuclidean")
+        d2[np.arange(stop - start), np.arange(start, stop)] = -1.0        # itself first
+        near = np.argpartition(d2, k, axis=1)[:, :k + 1] if k + 1 < n else \
+            np.broadcast_to(np.arange(n), d2.shape).copy()
+        near = np.take_along_axis(near, np.argsort(np.take_along_axis(d2, near, 1), axis=1,
+                                                   kind="stable"), 1)
+        out[start:stop] = near[:, 1:k + 1]
+    return out
+
+
+def structure_relative(words: np.ndarray, neighbours: np.ndarray, ks) -> list[np.ndarray]:
+    """Each shape's word profile minus the mean profile of its k nearest structural neighbours,
+    for every k in `ks` (`neighbours` from `look_alikes`, at least max(ks) of them per shape;
+    k >= N-1 is plain centring on the collection mean). One cumulative sum over the neighbours
+    serves every k, in row blocks."""
+    words = np.asarray(words, np.float64)
+    n = len(words)
+    out = [np.empty_like(words) for _ in ks]
+    inner = [i for i, k in enumerate(ks) if k < n - 1]
+    for i, k in enumerate(ks):
+        if k >= n - 1:
+            out[i] = words - words.mean(axis=0)
+    if inner:
+        kmax = max(ks[i] for i in inner)
+        step = max(1, int(2 ** 22 // max(1, kmax * words.shape[1])))   # ~32 MB of gathered rows
+        for start in range(0, n, step):
+            stop = min(n, start + step)
+            sums = np.cumsum(words[neighbours[start:stop, :kmax]], axis=1)
+            for i in inner:
+                out[i][start:stop] = words[start:stop] - sums[:, ks[i] - 1] / ks[i]
+    return out
 
 
 def style_space(x: np.ndarray, n_dims: int) -> np.ndarray:
@@ -72,16 +98,14 @@ def style_space(x: np.ndarray, n_dims: int) -> np.ndarray:
     return p / np.maximum(np.linalg.norm(p, axis=1, keepdims=True), 1e-12)
 
 
-def fusion_views(words: np.ndarray, layout: np.ndarray, lines: np.ndarray,
+def fusion_views(words: np.ndarray, neighbours: np.ndarray, lines: np.ndarray,
                  n_dims: int) -> tuple[list, list]:
     """The default method's views and their names: one structure-relative word view per rung of
-    the neighbour ladder, then the line-character view; each in its `n_dims` principal
-    directions (style_space)."""
-    n = len(words)
-    views, names = [], []
-    for k in neighbour_ladder(n):
-        views.append(style_space(structure_relative(words, layout, k), n_dims))
-        names.append(f"words vs {k} look-alikes")
+    the neighbour ladder (`neighbours` from `look_alikes`), then the line-character view; each
+    in its `n_dims` principal directions (style_space)."""
+    ks = neighbour_ladder(len(words))
+    views = [style_space(r, n_dims) for r in structure_relative(words, neighbours, ks)]
+    names = [f"words vs {k} look-alikes" for k in ks]
     views.append(style_space(lines, n_dims))
     names.append("line character")
     return views, names

@@ -131,3 +131,35 @@ def test_shared_bank_pools_views_and_keeps_real_patches():
         i = np.flatnonzero((shape == bank.shape[f]) & (view == bank.view[f])
                            & np.all(centres == bank.pixel[f], axis=1))
         assert len(i) and np.allclose(unit_rows(desc[i[:1]]).reshape(bank.hog[f].shape), bank.hog[f])
+
+
+def test_the_descriptor_draw_is_bounded_and_independent_of_the_shape_order():
+    """A draw capped below the number of patches keeps the same descriptors (by content) however
+    the shapes are fed, holds at most twice the cap meanwhile, and equals one capped draw of
+    them all at once."""
+    from style_coanalysis.encoding import DescriptorDraw, content_keys
+    rng = np.random.default_rng(2)
+    maps = rng.random((8, 2, 12, 12, 36)).astype(np.float32)
+    view = rng.integers(0, 2, (8, 30))
+    centres = rng.uniform(10, 90, (8, 30, 2)).astype(np.float32)
+
+    def draw(order, limit):
+        d = DescriptorDraw(24, limit=limit, salt=3)
+        held = 0
+        for s in order:
+            d.add(maps[s], int(s), view[s], np.arange(30), centres[s])
+            held = max(held, sum(len(p[0]) for p in d._parts))
+        return d, held
+
+    a, held = draw(range(8), 25)
+    b, _ = draw(rng.permutation(8), 25)
+    assert held <= 2 * 25 + 30
+    ba, bb = a.bank(6, 0), b.bank(6, 0)
+    np.testing.assert_array_equal(ba.hog, bb.hog)
+    np.testing.assert_array_equal(ba.shape, bb.shape)
+    # the kept descriptors are the 25 with the smallest content keys of all 240
+    desc, _ = patch_descriptors(maps.reshape(-1, 12, 12, 36),
+                                (np.arange(8)[:, None] * 2 + view).ravel(), centres.reshape(-1, 2), 24)
+    keys = np.sort(content_keys(desc, 3))[:25]
+    kept = np.sort(np.concatenate([p[0] for p in a._parts]))
+    np.testing.assert_allclose(kept, keys)

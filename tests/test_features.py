@@ -1,5 +1,6 @@
 """The patch descriptor is the view map's own window: filter and map are comparable."""
 import numpy as np
+import pytest
 
 from style_coanalysis import features
 from style_coanalysis.features import hog_images, patch_blocks, patch_descriptors
@@ -54,3 +55,18 @@ def test_descriptor_is_cut_at_the_nearest_cell_and_batched():
     for i in range(4):
         r, c = origins[i]
         np.testing.assert_array_equal(desc[i], maps[which[i], r:r + 5, c:c + 5])
+
+
+def test_the_map_store_gives_back_each_shape_s_maps():
+    from style_coanalysis.features import MapStore
+    rng = np.random.default_rng(0)
+    maps = rng.random((5, 3, 4, 4, 36)).astype(np.float32)
+    store = MapStore()
+    for m in maps:
+        store.append(m)
+    assert len(store) == 5
+    for i in (3, 0, 4):
+        np.testing.assert_array_equal(store[i], maps[i])
+    with pytest.raises(ValueError):
+        store.append(maps[0, :2])
+    store.close()

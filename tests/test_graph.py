@@ -42,4 +42,32 @@ def test_fusion_keeps_what_the_views_agree_on():
     fused = graph.fuse([graph.affinity(v1), graph.affinity(v2)])
     assert adjusted_rand_score(shared, graph.partition(fused, 2)) == 1.0
     weights_one = graph.fuse([graph.affinity(v1), graph.affinity(v2)], [1.0, 0.0])
-    np.testing.assert_allclose(weights_one, graph.affinity(v1))
+    np.testing.assert_allclose(weights_one.toarray(), graph.affinity(v1).toarray())
+
+
+def test_each_view_graph_is_sparse_symmetric_and_keeps_ties():
+    """Every shape keeps its nearest shapes (at least N_EDGES edges), the graph is symmetric and
+    grows with N, not N^2; and shapes tied with the last neighbour kept are kept too, so the
+    graph of a collection with duplicates does not depend on the order."""
+    x, _ = _blobs([300, 300, 300], seed=4)
+    a = graph.affinity(x)
+    n = len(x)
+    deg = np.diff(a.indptr)
+    assert deg.min() >= graph.N_EDGES and a.nnz <= 2 * graph.N_EDGES * n
+    assert abs(a - a.T).max() == 0 and a.diagonal().max() == 0
+    dup = np.repeat(x[:40], 3, axis=0)                   # every point three times
+    perm = np.random.default_rng(0).permutation(len(dup))
+    g, gp = graph.affinity(dup).toarray(), graph.affinity(dup[perm]).toarray()
+    np.testing.assert_allclose(gp, g[np.ix_(perm, perm)])
+
+
+def test_large_graphs_are_solved_like_small_ones():
+    """The Lanczos solver used above DENSE_BELOW shapes finds the dense solver's eigenvalues."""
+    from scipy.linalg import eigh
+    x, _ = _blobs([150, 150, 100], seed=5)
+    a = graph.affinity(x)
+    w, u = graph.embedding(a, 4)
+    d = 1 / np.sqrt(np.asarray(a.sum(axis=1)).ravel())
+    dense = eigh(a.toarray() * d[:, None] * d[None, :], eigvals_only=True)[::-1][:4]
+    assert len(x) >= graph.DENSE_BELOW
+    np.testing.assert_allclose(w, dense, atol=1e-8)

@@ -62,8 +62,9 @@ def test_unsupervised_finds_style_above_chance(collection, unsupervised):
     nb = patch_blocks(PARAMS.patch_size)      # comparable with localisation's patch descriptors
     assert all(0 <= sf.cluster < 3 and sf.hog.shape == (nb, nb, 36) for sf in result.style_filters)
     assert result.rounds[0]["n_filters"] > min(r["n_selected"] for r in result.rounds)  # selected
-    for stage in ("patches", "hog", "encode", "fuse", "cluster", "reselect"):
+    for stage in ("hog", "representatives", "encode", "fuse", "cluster", "reselect"):
         assert stage in stages and stage in result.timings
+    assert stages.count("hog") == n and stages.count("encode") == n      # shape by shape
     d = style_similarity(result)
     assert d.shape == (n, n) and np.allclose(d, d.T) and np.allclose(np.diag(d), 0, atol=1e-6)
 
@@ -137,7 +138,7 @@ def test_cancel_and_bad_constraints_stop_before_work(collection):
 
 
 def test_structure_relative_words_cancel_what_structural_look_alikes_share():
-    from style_coanalysis.views import structure_relative, style_space
+    from style_coanalysis.views import look_alikes, structure_relative, style_space
     rng = np.random.default_rng(0)
     n = 60
     group = np.repeat(np.arange(3), 20)                      # structure: 3 builds
@@ -146,7 +147,7 @@ def test_structure_relative_words_cancel_what_structural_look_alikes_share():
     words = 3.0 * np.eye(3)[group] @ rng.random((3, 8))      # build words, strong
     words[:, :2] += 0.5 * np.eye(2)[style]                   # ornament words, weak
     words += 0.05 * rng.random(words.shape)
-    r = structure_relative(words, structure, 10)
+    r, = structure_relative(words, look_alikes(structure, 10), [10])
     assert np.abs(r[:, 2:]).mean() < 0.2 * np.abs(words[:, 2:] - words[:, 2:].mean(0)).mean()
     sp = style_space(r, 2)
     from sklearn.cluster import KMeans
@@ -155,7 +156,27 @@ def test_structure_relative_words_cancel_what_structural_look_alikes_share():
     lab_raw = KMeans(2, n_init=5, random_state=0).fit_predict(words)
     assert purity(lab_raw, style) < 0.8                      # raw words follow the builds
     # with the whole collection as look-alikes it is plain centring
-    np.testing.assert_allclose(structure_relative(words, structure, n - 1), words - words.mean(0))
+    centred, = structure_relative(words, look_alikes(structure, 4), [n - 1])
+    np.testing.assert_allclose(centred, words - words.mean(0))
+
+
+def test_look_alike_means_match_a_direct_computation_across_row_blocks():
+    """The blocked, cumulative ladder gives each rung's mean over exactly the k nearest
+    structural neighbours (a collection larger than one block of rows)."""
+    from sklearn.metrics import pairwise_distances
+    from style_coanalysis.views import BLOCK, look_alikes, neighbour_ladder, structure_relative
+    rng = np.random.default_rng(3)
+    n = BLOCK + 77
+    layout, words = rng.random((n, 6)), rng.random((n, 9))
+    ks = neighbour_ladder(n)
+    near = look_alikes(layout, max(k for k in ks if k < n - 1))
+    s = (layout - layout.mean(0)) / layout.std(0)
+    d = pairwise_distances(s)
+    np.fill_diagonal(d, np.inf)
+    order = np.argsort(d, axis=1)
+    for k, r in zip(ks, structure_relative(words, near, ks)):
+        expect = words - (words[order[:, :k]].mean(axis=1) if k < n - 1 else words.mean(0))
+        np.testing.assert_allclose(r, expect, atol=1e-9)
 
 
 def test_the_neighbour_ladder_spans_the_collection():
@@ -164,3 +185,29 @@ def test_the_neighbour_ladder_spans_the_collection():
         ks = neighbour_ladder(n)
         assert ks[0] == n - 1 and all(a > b for a, b in zip(ks, ks[1:]))
         assert min(ks) >= min(MIN_NEIGHBOURS, n - 1) and min(ks) < 2 * MIN_NEIGHBOURS
+
+
+def test_encoding_reads_the_shapes_one_at_a_time(collection):
+    """`encode` needs no list of drawings nor every map at once: given a sequence that makes each
+    shape on access, it gives the encoding of the same shapes held in memory with their maps."""
+    from style_coanalysis.features import collection_maps
+    from style_coanalysis.pipeline import encode
+    drawings, _, _ = collection
+
+    class OnAccess:
+        reads = 0
+
+        def __len__(self):
+            return len(drawings)
+
+        def __getitem__(self, i):
+            if not 0 <= i < len(drawings):
+                raise IndexError(i)
+            OnAccess.reads += 1
+            return drawings[i]
+
+    lazy = encode(OnAccess(), PARAMS)
+    held = encode(drawings, PARAMS, maps=collection_maps(drawings))
+    assert OnAccess.reads == len(drawings)               # one pass over the drawings
+    for field in ("words", "layout", "lines", "relative", "neighbours"):
+        np.testing.assert_array_equal(getattr(lazy, field), getattr(held, field))

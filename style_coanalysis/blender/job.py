@@ -154,13 +154,12 @@ def _run_steps(meshes: list[Mesh], options: JobOptions):
     # 2. the analysis, on the first n_seeds seeds of each shape; the HOG maps are computed
     # once here because the style regions (stage 3) read them too
     from .. import pipeline
-    from ..features import hog_images
+    from ..features import MapStore, hog_images
     t0 = time.perf_counter()
-    maps = []
+    maps = MapStore()       # on disk: a collection's maps need not fit in memory
     for i, d in enumerate(drawings):
         yield ("hog", i, len(drawings))
         maps.append(hog_images(d.images))
-    maps = np.stack(maps)
     timings["hog"] = time.perf_counter() - t0
     t0 = time.perf_counter()
     analysis_drawings = [seed_subset(d, options.n_seeds) for d in drawings]
@@ -197,6 +196,7 @@ def _run_steps(meshes: list[Mesh], options: JobOptions):
             confidence=float(result.confidence[i]), best_view=loc.best_view,
             best_view_matrix=camera_matrix(rig, loc.best_view, centre, radius, options.up),
             vertex_weights=loc.weights, style_vertex_fraction=float((loc.weights > 0.5).mean())))
+    maps.close()
     timings["localise"] = time.perf_counter() - t0
     timings["total"] = time.perf_counter() - t_start
 
