@@ -7,8 +7,11 @@
 Part 1, the whole headless job (`job.run_steps`: draw, HOG, analyse, localise) on the first N
 shapes of the sample collection, per renderer and number of jobs, from an empty drawing cache;
 then once more on the same shapes (the cache's worth: the second run over the first). Part 2, the
-analysis alone: the sample's drawings repeated to N shapes (renamed copies hit the drawing cache,
-so drawing costs only the cache reads) to see how HOG, analysis and regions grow with N.
+analysis alone, without Blender: the drawings of the benchmark's sample-120 made into N distinct
+shapes (each copy mirrored and shifted by a few pixels, so no two are alike and the graph is not
+120 cliques), generated one at a time as the analysis reads them, to see how HOG, encoding
+(patches, dictionaries, word profiles), fusion, clustering and style regions grow with N. Regions
+of a copy use the original's mesh and cameras (the cost is what is measured, not where they lie).
 
 Each measurement runs in a fresh process, so its peak memory (the largest resident set of the
 process and of its drawing workers) is its own; a process that grows past --mem-limit-gb is
@@ -27,23 +30,95 @@ import tempfile
 import threading
 import time
 from dataclasses import replace
+
+import numpy as np
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT))
 
 STAGES = ("render", "hog", "analyse", "localise")
+ANALYSIS_STAGES = ("hog", "encoding", "fusion", "clustering", "regions")
 
 
 # ---------------------------------------------------------------- one measurement (a child)
-def sample_meshes(size: int, repeat_of: int | None):
-    """The first `size` sample shapes, or the first `repeat_of` repeated (renamed) to `size`."""
+def sample_meshes(size: int):
+    """The first `size` shapes of the sample collection."""
     from style_coanalysis import sample
-    if not repeat_of:
-        return sample.generate(size=size, seed=0)
-    base = sample.generate(size=repeat_of, seed=0)
-    return [replace(base[i % len(base)], name=f"{base[i % len(base)].name}~{i // len(base)}")
-            for i in range(size)]
+    return sample.generate(size=size, seed=0)
+
+
+class Copies:
+    """`size` distinct shapes made from a collection's drawings: copy j of drawing i is drawing
+    i mirrored (odd copies) and shifted by a few whole pixels, seeds moved with the ink. Made on
+    access, never held: a sequence the analysis reads one shape at a time."""
+
+    SHIFTS = [(dy, dx) for r in range(4) for dy in range(-r, r + 1) for dx in range(-r, r + 1)
+              if max(abs(dy), abs(dx)) == r]
+
+    def __init__(self, drawings, size: int):
+        self.base, self.size = drawings, size
+
+    def __len__(self) -> int:
+        return self.size
+
+    def __getitem__(self, j: int):
+        if not 0 <= j < self.size:
+            raise IndexError(j)
+        d = self.base[j % len(self.base)]
+        copy = j // len(self.base)
+        if copy == 0:
+            return d
+        dy, dx = self.SHIFTS[(copy // 2) % len(self.SHIFTS)]
+        img = d.images[:, :, ::-1] if copy % 2 else d.images
+        img = np.roll(img, (dy, dx), axis=(1, 2))
+        px = d.seed_pixels.copy()
+        if copy % 2:
+            px[..., 0] = img.shape[2] - px[..., 0]
+        px += np.array([dx, dy], np.float32)
+        return replace(d, name=f"{d.name}~{copy}", images=np.ascontiguousarray(img),
+                       seed_pixels=px)
+
+
+def measure_analysis(size: int) -> dict:
+    """HOG, encoding, fusion, clustering and regions of `size` copies of sample-120, one shape
+    at a time; peak memory after each stage (the process' largest resident set so far)."""
+    from style_coanalysis import localisation, pipeline
+    from style_coanalysis.evaluation import benchmark as B
+    from style_coanalysis.features import MapStore, hog_images
+    from style_coanalysis.meshes import normalise
+    from style_coanalysis.options import build_options
+    coll = B.load_collection("sample-120", log=lambda m: None)
+    base_meshes = [normalise(m) for m in coll.meshes]
+    drawings = Copies(coll.drawings, size)
+    del coll.maps
+    options = build_options()
+    params = options.params
+    seconds, peak = {}, {}
+    t = time.perf_counter()
+    maps = MapStore()
+    for i in range(size):
+        maps.append(hog_images(drawings[i].images))
+    seconds["hog"], peak["hog"] = time.perf_counter() - t, peak_rss_mb()
+    t = time.perf_counter()
+    enc = pipeline.encode(drawings, params, maps=maps)
+    seconds["encoding"], peak["encoding"] = time.perf_counter() - t, peak_rss_mb()
+    result = pipeline.analyse(drawings, params, maps=maps, encoded=enc)
+    seconds["fusion"] = result.timings["fuse"]
+    seconds["clustering"] = result.timings["cluster"] + result.timings["reselect"]
+    peak["clustering"] = peak_rss_mb()
+    t = time.perf_counter()
+    marked = localisation.top_words(result.word_cluster, result.word_score,
+                                    options.localisation.words_per_cluster)
+    for i in range(size):
+        m = base_meshes[i % len(base_meshes)]
+        localisation.localise_shape(drawings[i], m.vertices, m.faces, result.words, marked,
+                                    int(result.clusters[i]), params.patch_size,
+                                    options.localisation.match_threshold, maps=maps[i])
+    seconds["regions"], peak["regions"] = time.perf_counter() - t, peak_rss_mb()
+    maps.close()
+    return {"size": size, "seconds": seconds, "peak_mb": peak, "n_clusters": result.n_clusters,
+            "rounds": len(result.rounds)}
 
 
 def peak_rss_mb() -> float:
@@ -53,12 +128,12 @@ def peak_rss_mb() -> float:
     return max(own, kids) / 1024.0
 
 
-def measure(size: int, renderer: str, jobs: int, cache: str, repeat_of: int | None) -> dict:
+def measure(size: int, renderer: str, jobs: int, cache: str) -> dict:
     import bpy
     from style_coanalysis.blender.job import run_steps
     from style_coanalysis.options import build_options
     bpy.ops.wm.read_factory_settings(use_empty=True)
-    meshes = sample_meshes(size, repeat_of)
+    meshes = sample_meshes(size)
     options = build_options(jobs=jobs, cache_dir=cache)
     options = replace(options, renderer=renderer)    # also a renderer options.py does not list yet
     t0 = time.perf_counter()
@@ -72,7 +147,7 @@ def measure(size: int, renderer: str, jobs: int, cache: str, repeat_of: int | No
     wall = time.perf_counter() - t0
     seconds = job.report["seconds"]
     scores = job.report.get("scores", {}).get("style", {})
-    return {"size": size, "renderer": renderer, "jobs": jobs, "repeat_of": repeat_of,
+    return {"size": size, "renderer": renderer, "jobs": jobs,
             "wall": wall, "seconds": {k: seconds.get(k, 0.0) for k in STAGES},
             "shapes": len(job.shapes), "skipped": len(job.skipped),
             "purity": scores.get("purity"), "peak_mb": peak_rss_mb()}
@@ -133,10 +208,6 @@ def main() -> None:
     ap.add_argument("--renderers", nargs="*", default=["lineart", "freestyle"])
     ap.add_argument("--jobs", type=int, nargs="*", default=[1, 2])
     ap.add_argument("--analysis-sizes", type=int, nargs="*", default=[120, 1050, 5000])
-    ap.add_argument("--analysis-base", type=int, default=120,
-                    help="part 2 repeats the drawings of this many sample shapes")
-    ap.add_argument("--analysis-renderer", default="lineart",
-                    help="renderer of the drawings repeated in part 2")
     ap.add_argument("--work", default=None, help="folder for the drawing caches (default: a "
                     "temporary folder, removed at the end)")
     ap.add_argument("--mem-limit-gb", type=float, default=12.0)
@@ -187,24 +258,27 @@ def main() -> None:
                                       f", whole job {rs[slow]['wall'] / v['wall']:.1f}x")
 
     if args.analysis_sizes:
-        print(f"\n## Analysis alone: the drawings of {args.analysis_base} sample shapes "
-              f"({args.analysis_renderer}) repeated to N shapes, warm cache, 1 job")
-        print(HEADER)
-        cache = work / f"cache-repeat-{args.analysis_renderer}"
-        run_child(["--size", str(args.analysis_base), "--renderer", args.analysis_renderer,
-                   "--jobs", "2", "--cache", str(cache)], args.mem_limit_gb)     # fills the cache
+        print("\n## Analysis alone: copies of the benchmark's sample-120 drawings (mirrored, "
+              "shifted), one shape at a time, no Blender")
+        print(f"{'N':>6s} " + " ".join(f"{k + ' s':>13s}" for k in ANALYSIS_STAGES)
+              + f" {'ms/shape':>9s} {'peak MB':>8s} {'k':>3s} {'rounds':>6s}")
         base = None
         for size in args.analysis_sizes:
-            r = run_child(["--size", str(size), "--renderer", args.analysis_renderer,
-                           "--jobs", "1", "--cache", str(cache),
-                           "--repeat-of", str(args.analysis_base)], args.mem_limit_gb)
-            print(row(f"N={size}", r), flush=True)
+            r = run_child(["--analysis", "--size", str(size)], args.mem_limit_gb)
             if "error" in r:
+                print(f"{size:6d} {r['error']}", flush=True)
                 continue
-            per = {k: r["seconds"][k] / size for k in ("hog", "analyse", "localise")}
+            s = r["seconds"]
+            per = {k: 1000 * s[k] / size for k in ANALYSIS_STAGES}
+            print(f"{size:6d} " + " ".join(f"{s[k]:13.1f}" for k in ANALYSIS_STAGES)
+                  + f" {sum(per.values()):9.1f} {max(r['peak_mb'].values()):8.0f}"
+                  + f" {r['n_clusters']:3d} {r['rounds']:6d}", flush=True)
+            print(f"{'':6s} ms per shape: " + ", ".join(f"{k} {per[k]:.2f}" for k in per)
+                  + "; peak MB after " + ", ".join(f"{k} {v:.0f}" for k, v in r["peak_mb"].items()),
+                  flush=True)
             if base is None:
                 base = per
-            print(f"{'':34s} per shape vs N={args.analysis_sizes[0]}: " + ", ".join(
+            print(f"{'':6s} per shape vs N={args.analysis_sizes[0]}: " + ", ".join(
                 f"{k} {per[k] / max(1e-9, base[k]):.2f}x" for k in per), flush=True)
 
 
@@ -212,12 +286,12 @@ def one() -> None:
     ap = argparse.ArgumentParser()
     ap.add_argument("_one")
     ap.add_argument("--size", type=int, required=True)
-    ap.add_argument("--renderer", required=True)
-    ap.add_argument("--jobs", type=int, required=True)
-    ap.add_argument("--cache", required=True)
-    ap.add_argument("--repeat-of", type=int, default=None)
+    ap.add_argument("--renderer")
+    ap.add_argument("--jobs", type=int, default=1)
+    ap.add_argument("--cache")
+    ap.add_argument("--analysis", action="store_true")
     a = ap.parse_args()
-    r = measure(a.size, a.renderer, a.jobs, a.cache, a.repeat_of)
+    r = measure_analysis(a.size) if a.analysis else measure(a.size, a.renderer, a.jobs, a.cache)
     print("RESULT " + json.dumps(r), flush=True)
 
 
