@@ -4,9 +4,9 @@ The drawings are read and checked first (a bad image is refused by name before a
 then the shapes are drawn and analysed as `analyze` does (the analysis provides the word
 dictionary both sides are encoded with, `identify.py`), each shape's views vote, and the windows
 matching the words characteristic of the winning style are back-projected as its style regions.
-DIR gets identify.csv (name, style, the votes per style), identify.json and identify_regions.npz
-(per shape its regions' vertex and face weights), written into a temporary folder that then
-replaces DIR whole (`options.publish`), like `analyze`.
+DIR gets identify.csv (name, style, the votes per style) and identify.json (with, per shape, its
+regions' vertex and face weights), written into a temporary folder that then replaces DIR whole
+(`options.publish`), like `analyze`.
 """
 from __future__ import annotations
 
@@ -23,7 +23,7 @@ from .. import identify as ident
 from ..meshes import InputError, face_areas, normalise
 from ..options import PARAMETERS, build_options, check_output, publish
 
-CSV_NAME, JSON_NAME, REGIONS_NAME = "identify.csv", "identify.json", "identify_regions.npz"
+CSV_NAME, JSON_NAME = "identify.csv", "identify.json"
 
 
 @dataclass
@@ -67,6 +67,11 @@ def identify_job(meshes, options, drawings: ident.DrawingSet, progress=None) -> 
     return IdentifyRun(job, found, regions, word_style, styles)
 
 
+def rounded(weights) -> np.ndarray:
+    """Weights as identify.json holds them (4 decimals)."""
+    return np.round(np.asarray(weights, np.float64), 4)
+
+
 def region_summary(run: IdentifyRun, meshes, options) -> list:
     """Per shape: style-region faces (weight > 0.5) and their share of the surface area (in the
     normalised frame, so the figure does not depend on the file's unit)."""
@@ -74,7 +79,7 @@ def region_summary(run: IdentifyRun, meshes, options) -> list:
     out = []
     for shape, loc in zip(run.job.shapes, run.regions):
         m = normalise(by_name[shape.name], options.up)
-        inside = loc.face_weights > 0.5
+        inside = rounded(loc.face_weights) > 0.5       # counted on the weights as written
         area = face_areas(m.vertices, m.faces)
         out.append({"faces": int(inside.sum()),
                     "area_share": round(float(area[inside].sum() / max(area.sum(), 1e-30)), 4),
@@ -90,6 +95,31 @@ def table(job, found, drawings: ident.DrawingSet) -> str:
     for shape, r in zip(job.shapes, found):
         w.writerow([shape.name, r.style] + [r.votes[s] for s in styles])
     return buf.getvalue()
+
+
+def json_text(run: IdentifyRun, drawings: ident.DrawingSet, summary: list) -> str:
+    """identify.json: indented, except `region_weights`, one compact line per shape (thousands of
+    numbers each). The weights live here, not in a file of their own, because a later run may
+    replace --out only when it holds nothing but result entries (options.RESULT_ENTRIES)."""
+    job, found = run.job, run.found
+    head = json.dumps({
+        "drawings": [{"path": p, "style": s} for p, s in zip(drawings.paths, drawings.styles)],
+        "characteristic_words": {s: np.flatnonzero(run.word_style == k).tolist()
+                                 for k, s in enumerate(run.styles)},
+        "shapes": [{"name": sh.name, "style": r.style, "votes": r.votes,
+                    "nearest_drawing_per_view": [drawings.paths[j] for j in r.nearest],
+                    "region": reg}
+                   for sh, r, reg in zip(job.shapes, found, summary)],
+        "skipped": [{"name": n, "reason": why} for n, why in job.skipped],
+        "region_weights_note": "per shape, in 'shapes' order: 'vertex' in the object's vertex "
+                               "order, 'face' per triangle; > 0.5: style region"}, indent=1)
+    rows = [json.dumps({"name": sh.name,
+                        "vertex": rounded(loc.weights).tolist(),
+                        "face": rounded(loc.face_weights).tolist()},
+                       separators=(",", ":"))
+            for sh, loc in zip(job.shapes, run.regions)]
+    assert head.endswith("\n}")
+    return head[:-2] + ',\n "region_weights": [\n  ' + ",\n  ".join(rows) + "\n ]\n}\n"
 
 
 def run(args) -> int:
@@ -116,22 +146,7 @@ def run(args) -> int:
 
     def write(folder):
         (folder / CSV_NAME).write_text(table(job, found, drawings), encoding="utf-8")
-        (folder / JSON_NAME).write_text(json.dumps({
-            "drawings": [{"path": p, "style": s} for p, s in zip(drawings.paths, drawings.styles)],
-            "characteristic_words": {s: np.flatnonzero(run.word_style == k).tolist()
-                                     for k, s in enumerate(run.styles)},
-            "regions": f"{REGIONS_NAME}: vertex_weights_<i> (object vertex order) and "
-                       "face_weights_<i> (triangles), i the shape's index here; > 0.5: region",
-            "shapes": [{"name": sh.name, "style": r.style, "votes": r.votes,
-                        "nearest_drawing_per_view": [drawings.paths[j] for j in r.nearest],
-                        "region": reg}
-                       for sh, r, reg in zip(job.shapes, found, summary)],
-            "skipped": [{"name": n, "reason": why} for n, why in job.skipped]}, indent=1))
-        arrays = {}
-        for i, loc in enumerate(run.regions):
-            arrays[f"vertex_weights_{i}"] = loc.weights.astype(np.float32)
-            arrays[f"face_weights_{i}"] = loc.face_weights.astype(np.float32)
-        np.savez_compressed(folder / REGIONS_NAME, **arrays)
+        (folder / JSON_NAME).write_text(json_text(run, drawings, summary), encoding="utf-8")
     publish(out, write)
     print(f"{len(found)} shapes identified from {len(drawings.styles)} drawings of "
           f"{len(set(drawings.styles))} styles; wrote {out}/{CSV_NAME}", file=sys.stderr)
