@@ -172,8 +172,10 @@ class STYLE_OT_identify_from_drawings(bpy.types.Operator):
         counts = {}
         for _, style, _ in rows:
             counts[style] = counts.get(style, 0) + 1
+        marked = sum(int((loc.face_weights > 0.5).any()) for loc in run.regions)
         self.report({"INFO"}, f"{len(rows)} shapes identified: "
-                    + ", ".join(f"{s} {n}" for s, n in sorted(counts.items())))
+                    + ", ".join(f"{s} {n}" for s, n in sorted(counts.items()))
+                    + f"; style regions on {marked} (vertex group {IDENTIFIED_GROUP})")
         return {"FINISHED"}
 
 
