@@ -192,3 +192,22 @@ def style_regions(shape_drawings, normal_meshes, found: list, word_style: np.nda
             d, m.vertices, m.faces, words, word_style, names.index(r.style), patch_size,
             threshold, maps=None if maps is None else maps[i]))
     return out
+
+
+def identify_shapes(shape_drawings, normal_meshes, drawings: DrawingSet, words: np.ndarray,
+                    per_style: int, patch_size: int, threshold: float, progress=None):
+    """(found, regions, word_style, names) for whole shapes (ShapeDrawings and their meshes in
+    the normalised frame): the vote, the characteristic words, the regions. One shape at a time,
+    so only one shape's HOG maps are held whatever the collection's size. `progress(stage, done,
+    total)` before each shape."""
+    codes = encode_drawings([d.images for d in shape_drawings], drawings, words)
+    word_style, names = characteristic_words(codes, drawings.styles, per_style)
+    found, regions = [], []
+    for i, (d, m) in enumerate(zip(shape_drawings, normal_meshes)):
+        if progress is not None:
+            progress("identify", i, len(shape_drawings))
+        maps = hog_images(d.images)
+        found.append(vote(encode(None, words, maps), codes, drawings.styles))
+        regions += style_regions([d], [m], found[-1:], word_style, names, words, patch_size,
+                                 threshold, maps=[maps])
+    return found, regions, word_style, names

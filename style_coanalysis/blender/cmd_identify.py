@@ -51,19 +51,11 @@ def identify_job(meshes, options, drawings: ident.DrawingSet, progress=None) -> 
         except StopIteration as stop:
             job = stop.value
             break
-    from ..features import hog_images
-    words = job.analysis.words
-    views = [d.images for d in job.drawings]
-    maps = [hog_images(d.images) for d in job.drawings]     # read by the vote and the regions
-    codes = ident.encode_drawings(views, drawings, words)
-    found = ident.identify(views, drawings, words, maps=maps, codes=codes)
-    word_style, styles = ident.characteristic_words(codes, drawings.styles,
-                                                    options.localisation.words_per_cluster)
     by_name = {m.name: m for m in meshes}
-    normal = [normalise(by_name[s.name], options.up) for s in job.shapes]
-    regions = ident.style_regions(job.drawings, normal, found, word_style, styles, words,
-                                  options.params.patch_size,
-                                  options.localisation.match_threshold, maps=maps)
+    normal = (normalise(by_name[s.name], options.up) for s in job.shapes)   # one at a time
+    found, regions, word_style, styles = ident.identify_shapes(
+        job.drawings, normal, drawings, job.analysis.words, options.localisation.words_per_cluster,
+        options.params.patch_size, options.localisation.match_threshold, progress)
     return IdentifyRun(job, found, regions, word_style, styles)
 
 
