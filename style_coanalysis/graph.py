@@ -13,9 +13,11 @@ A_ij = exp(-d_ij^2 / (s_i s_j)), s_i the distance to the i-th shape's 7th neighb
 value), so dense and sparse parts of a view are treated alike. Why a sparse graph: beyond its
 nearest shapes a shape's affinities only order shapes that are not alike, which the cut should
 not read, and a dense graph costs N^2 memory and an N^3 eigensolver (5,000 shapes: 200 MB per
-view). Measured on one round of 22 cached encodings (k given, style purity, mean): every shape
-linked to all 0.695, to its 40 nearest 0.707, 30 nearest 0.706, 20 nearest 0.714 (sample-styles-3
-0.71 -> 0.88, sample-cats-2 0.71 -> 0.81, collection2 0.63 -> 0.57). The graph is built in row
+view). Measured on one round of 22 cached encodings of the benchmark's collections (style
+purity with k given, mean; automatic k right): every shape linked to all 0.695, 13 of 22; to its
+60 nearest 0.698, 13; 40 nearest 0.705, 14; 30 nearest 0.713, 12; 20 nearest 0.708, 10, and
+with 20 the automatic k of sample-120 drawn again at coordinates x 1.0000001 moved from 3 to 5
+(two spectral gaps 0.0959 and 0.0962): 40 keeps it at 3. The graph is built in row
 blocks, so memory grows with N, not N^2.
 
 Order of the input: every step is equivariant to a permutation of the shapes (a neighbour tied
@@ -34,7 +36,7 @@ from sklearn.metrics import pairwise_distances
 from sklearn.preprocessing import normalize
 
 K_NEIGHBOURS = 7          # the local scale: distance to the 7th neighbour (Zelnik-Manor, Perona)
-N_EDGES = 20              # each shape's edges in a view's graph: its nearest shapes
+N_EDGES = 40              # each shape's edges in a view's graph: its nearest shapes
 BLOCK = 256               # rows of the distance matrix held at once
 DENSE_BELOW = 300         # smaller graphs are solved densely (exact, and faster there)
 
