@@ -183,8 +183,8 @@ class STYLE_OT_show_weights(bpy.types.Operator):
 
 
 class STYLE_OT_clear_results(bpy.types.Operator):
-    """Remove everything the last analysis wrote (weights, highlight, clusters, properties); the
-    meshes' own materials come back exactly"""
+    """Remove everything the last analysis and identification wrote (weights, highlight,
+    clusters, properties); the meshes' own materials come back exactly"""
 
     bl_idname = "style.clear_results"
     bl_label = "Clear Style Results"
@@ -196,14 +196,16 @@ class STYLE_OT_clear_results(bpy.types.Operator):
             cls.poll_message_set("Switch to Object Mode")
             return False
         if not len(context.scene.style_coanalysis.clusters) and not any(
-                _has_results(o) for o in context.scene.objects):
+                _has_results(o) or writeback.has_identified(o) for o in context.scene.objects):
             cls.poll_message_set("There are no style results in this scene")
             return False
         return True
 
     def execute(self, context):
         n = writeback.clear_results(context.scene)
-        self.report({"INFO"}, f"Cleared style results from {n} objects")
+        m = writeback.clear_identified(context.scene)
+        self.report({"INFO"}, f"Cleared style results from {n} objects"
+                    + (f", identified styles from {m}" if m else ""))
         return {"FINISHED"}
 
 

@@ -17,8 +17,8 @@ from ..style_coanalysis.suggest import suggest
 
 SIMILAR_KEY = "style_similar"       # {"query": name, "ranked": [[name, distance, cluster], ...]}
 SUGGESTED_KEY = "style_suggested"   # [[name, reason], ...]
-IDENTIFIED_KEY = "style_identified"  # [[name, style, votes], ...]
-IDENTIFIED_GROUP = "style_identified_weight"
+IDENTIFIED_KEY = writeback.IDENTIFIED_SCENE_KEY   # [[name, style, votes], ...]
+IDENTIFIED_GROUP = writeback.IDENTIFIED_GROUP
 
 
 def _space(cls, context):
@@ -201,8 +201,9 @@ def write_identified(scene, run):
                                     np.clip(weights, 0.0, 1.0))
     for shape, r in zip(run.job.shapes, run.found):
         obj = scene.objects[shape.name]
-        obj["style_identified"] = r.style
-        obj["style_identified_votes"] = json.dumps(r.votes)
+        style_key, votes_key = writeback.IDENTIFIED_KEYS
+        obj[style_key] = r.style
+        obj[votes_key] = json.dumps(r.votes)
 
 
 CLASSES = (STYLE_OT_select_similar, STYLE_OT_suggest_labels, STYLE_OT_identify_from_drawings)

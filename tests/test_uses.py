@@ -344,3 +344,6 @@ def test_identify_button(base, ext, tmp_path):
         assert set(keys) == set(before[0][name][1]) | added[1]
     from style_coanalysis_ext.operators.uses import IDENTIFIED_KEY, read_list
     assert sorted(r[0] for r in read_list(scene, IDENTIFIED_KEY)) == sorted(o.name for o in meshes)
+    # Clear Results takes the identification away too, and leaves the scene as before it
+    assert bpy.ops.style.clear_results() == {"FINISHED"}
+    assert state() == before and IDENTIFIED_KEY not in scene

@@ -39,6 +39,10 @@ THRESHOLD = 0.5
 ORANGE = (1.0, 0.45, 0.05, 1.0)
 OBJECT_KEYS = ("style_cluster", "style_label", "style_label_given", "style_confidence",
                "style_best_view", "style_best_view_matrix")
+# what Identify Style from Drawings writes (operators/uses.py): per object, and its scene list
+IDENTIFIED_KEYS = ("style_identified", "style_identified_votes")
+IDENTIFIED_GROUP = "style_identified_weight"
+IDENTIFIED_SCENE_KEY = "style_identified"
 
 
 class WritebackError(ValueError):
@@ -321,6 +325,32 @@ def clear_results(scene) -> int:
         settings.clusters.clear()
         settings.active_cluster_index = 0
         settings.last_report = ""
+    return cleared
+
+
+def has_identified(obj) -> bool:
+    """Whether Identify Style from Drawings wrote on `obj`."""
+    return any(k in obj for k in IDENTIFIED_KEYS) or (
+        obj.type == "MESH" and obj.vertex_groups.get(IDENTIFIED_GROUP) is not None)
+
+
+def clear_identified(scene) -> int:
+    """Remove what Identify Style from Drawings wrote (its properties and vertex group, and the
+    scene's list); returns the number of objects cleared. Separate from `clear_results`, which
+    every analysis run calls first: a new analysis does not erase an identification."""
+    cleared = 0
+    for obj in scene.objects:
+        if not has_identified(obj):
+            continue
+        for key in IDENTIFIED_KEYS:
+            if key in obj:
+                del obj[key]
+        group = obj.vertex_groups.get(IDENTIFIED_GROUP) if obj.type == "MESH" else None
+        if group is not None:
+            obj.vertex_groups.remove(group)
+        cleared += 1
+    if IDENTIFIED_SCENE_KEY in scene:
+        del scene[IDENTIFIED_SCENE_KEY]
     return cleared
 
 
