@@ -325,7 +325,7 @@ def encode(drawings, params: AnalysisParams, maps=None, progress=None) -> Encodi
                  DescriptorDraw(params.structure_patch_size, salt=2 + rs))
         lines, n_patches = [], 0
         for i, d in enumerate(drawings):
-            prog.step("hog", i, n)
+            prog.step("hog" if store is not None else "patches", i, n)
             t = time.perf_counter()
             if store is not None:
                 store.append(hog_images(d.images))
