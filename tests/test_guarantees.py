@@ -87,6 +87,13 @@ def complete(out: Path) -> bool:
             and all((out / s).is_file() for s in srcs))
 
 
+def _terminal_sigint():
+    """The child starts with Ctrl-C's default action, as from a terminal: an ignored SIGINT is
+    inherited across exec, and `make test` launched in the background of a script ran with
+    SIGINT ignored, so the interrupted runs ran to the end (these two tests failed there)."""
+    signal.signal(signal.SIGINT, signal.SIG_DFL)
+
+
 def test_interrupted_runs_leave_the_previous_result_whole(shapes, tmp_path):
     out, cache = tmp_path / "out", tmp_path / "cache"
     args = ["analyze", shapes / "sample.blend", "--out", out, "--renderer", "lineart",
@@ -100,7 +107,7 @@ def test_interrupted_runs_leave_the_previous_result_whole(shapes, tmp_path):
     for stage in ("render", "analysis", "write", "save result.blend", "report"):
         proc = subprocess.Popen([sys.executable, "-m", "style_coanalysis",
                                  *map(str, [*args, "--seed", 7, "--jobs", 2])], cwd=ROOT,
-                                stderr=subprocess.PIPE, text=True)
+                                stderr=subprocess.PIPE, text=True, preexec_fn=_terminal_sigint)
         after_hog = sent = False
         for line in proc.stderr:
             m = re.match(r"\[ *[\d.]+ s\] (.+?) \d+/\d+", line)
@@ -290,7 +297,8 @@ def test_sigint_with_two_jobs_ends_the_workers_at_once(shapes, tmp_path):
     proc = subprocess.Popen([sys.executable, "-m", "style_coanalysis", "analyze",
                              str(shapes / "sample.blend"), "--out", str(tmp_path / "o"),
                              "--renderer", "freestyle", "--jobs", "2", "--cache",
-                             str(tmp_path / "cache")], cwd=ROOT, stderr=subprocess.PIPE, text=True)
+                             str(tmp_path / "cache")], cwd=ROOT, stderr=subprocess.PIPE, text=True,
+                            preexec_fn=_terminal_sigint)
     for line in proc.stderr:
         if "] render 0/6" in line:
             break
