@@ -169,20 +169,6 @@ class DescriptorDraw:
                           centre[pick])
 
 
-def shared_bank(view_maps, shape: np.ndarray, view: np.ndarray, seed: np.ndarray,
-                centre: np.ndarray, size: int, k: int, random_state: int = 0,
-                max_descriptors: int = 20000) -> FilterBank:
-    """`k` representative patches of all views together, from the patches listed by shape, view,
-    seed and centre over `view_maps` (a sequence of per-shape maps (V, by, bx, C)): a
-    `DescriptorDraw` fed shape by shape."""
-    draw = DescriptorDraw(size, max_descriptors, 1 + random_state)
-    shape = np.asarray(shape, np.int64)
-    for s in np.unique(shape):
-        at = shape == s
-        draw.add(view_maps[s], int(s), view[at], seed[at], centre[at])
-    return draw.bank(k, random_state)
-
-
 def word_assignments(maps: np.ndarray, filters: np.ndarray, ink: float = 0.5):
     """One shape's windows against the dictionary: best word, its cosine, and which are inked.
 

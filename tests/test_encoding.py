@@ -112,8 +112,8 @@ def test_word_counts_assign_each_inked_window_to_its_best_filter():
     assert f.shape == (2, 2) and np.allclose((f ** 2).sum(axis=1), 1.0)
 
 
-def test_shared_bank_pools_views_and_keeps_real_patches():
-    from style_coanalysis.encoding import shared_bank
+def test_the_dictionary_pools_views_and_keeps_real_patches():
+    from style_coanalysis.encoding import DescriptorDraw
     rng = np.random.default_rng(5)
     images = np.zeros((6, 200, 200), np.float32)
     for i in range(6):
@@ -123,7 +123,11 @@ def test_shared_bank_pools_views_and_keeps_real_patches():
     maps = hog_images(images).reshape(3, 2, 24, 24, -1)
     centres = rng.integers(30, 170, (40, 2)).astype(np.float32)
     shape, view = rng.integers(0, 3, 40), rng.integers(0, 2, 40)
-    bank = shared_bank(maps, shape, view, np.arange(len(shape)), centres, 48, k=5, random_state=0)
+    draw = DescriptorDraw(48)
+    for s in range(3):                  # fed shape by shape, as encode does
+        at = shape == s
+        draw.add(maps[s], s, view[at], np.flatnonzero(at), centres[at])
+    bank = draw.bank(5, random_state=0)
     assert 0 < len(bank) <= 5
     desc, _ = patch_descriptors(maps.reshape(-1, *maps.shape[2:]),
                                 shape * maps.shape[1] + view, centres, 48)
