@@ -320,6 +320,7 @@ def encode(drawings, params: AnalysisParams, maps=None, progress=None) -> Encodi
     rs = params.random_state
     timings = {"patches": 0.0, "hog": 0.0}
     store = MapStore() if maps is None else None
+    source = store if store is not None else maps       # where each shape's maps are read
     try:
         draws = (DescriptorDraw(params.patch_size, salt=1 + rs),
                  DescriptorDraw(params.structure_patch_size, salt=2 + rs))
@@ -329,7 +330,7 @@ def encode(drawings, params: AnalysisParams, maps=None, progress=None) -> Encodi
             t = time.perf_counter()
             if store is not None:
                 store.append(hog_images(d.images))
-            m = (store if store is not None else maps)[i]
+            m = source[i]
             timings["hog"] += time.perf_counter() - t
             t = time.perf_counter()
             p = extract_patches([d], size=params.patch_size)
@@ -354,7 +355,7 @@ def encode(drawings, params: AnalysisParams, maps=None, progress=None) -> Encodi
         layout_counts = np.zeros((n, len(layout_bank)))
         for i in range(n):
             prog.step("encode", i, n)
-            m = (store if store is not None else maps)[i][None]
+            m = source[i][None]
             counts[i] = word_counts(m, bank.hog).sum(axis=1)[0]
             layout_counts[i] = word_counts(m, layout_bank.hog).sum(axis=1)[0]
     finally:
