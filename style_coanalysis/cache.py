@@ -21,7 +21,7 @@ from .drawings import ShapeDrawings
 from .meshes import Mesh
 
 # Bump when the renderers, seeding or visibility change what they produce for the same input.
-CODE_VERSION = "drawings-2"
+CODE_VERSION = "drawings-3"
 
 
 def default_cache_dir() -> Path:
