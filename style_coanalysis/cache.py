@@ -5,9 +5,15 @@ Each entry is one .npz holding the arrays plus the key and a checksum over every
 to a temporary file and moved into place with `os.replace` (readers never see half a file). An
 entry that fails to load, has the wrong key, or whose checksum does not match is deleted and
 reported as a miss: a damaged cache costs a re-render, never a wrong answer.
+
+Beside it, in the same root, the same kind of store for what a second run would otherwise redo
+(issue 15: a rerun on unchanged shapes should cost a small share of the first):
+- `HogCache` (`hog/`): a shape's HOG maps, keyed by a digest of its images (all HOG reads) and
+  `hog_version()`, so however the drawings arrived, stale maps cannot be served.
 """
 from __future__ import annotations
 
+import functools
 import hashlib
 import json
 import os
@@ -22,6 +28,8 @@ from .meshes import Mesh
 
 # Bump when the renderers, seeding or visibility change what they produce for the same input.
 CODE_VERSION = "drawings-3"
+# Bump when HOG maps change in a way the source digest below would not see.
+HOG_VERSION = "hog-1"
 
 
 def default_cache_dir() -> Path:
@@ -49,17 +57,17 @@ def arrays_checksum(arrays: dict) -> str:
     return h.hexdigest()
 
 
-class DrawingCache:
-    """A folder of `<key>.npz` entries."""
+class _NpzStore:
+    """A folder of `<key>.npz` entries of plain arrays: what every cache here shares."""
 
-    def __init__(self, root: str | os.PathLike | None = None):
-        self.root = Path(root) if root is not None else default_cache_dir()
+    def __init__(self, root: Path):
+        self.root = root
 
     def path(self, key: str) -> Path:
         return self.root / key[:2] / f"{key}.npz"
 
-    def load(self, key: str) -> ShapeDrawings | None:
-        """The entry for `key`, or None if absent or not trustworthy (then it is removed)."""
+    def load_arrays(self, key: str) -> dict | None:
+        """The entry's arrays, or None if absent or not trustworthy (then it is removed)."""
         path = self.path(key)
         if not path.exists():
             return None
@@ -70,25 +78,27 @@ class DrawingCache:
             stored_sum = str(arrays.pop("_checksum"))
             if stored_key != key or stored_sum != arrays_checksum(arrays):
                 raise ValueError("key or checksum mismatch")
-            return ShapeDrawings.from_arrays(arrays)
+            return arrays
         except Exception:  # truncated zip, missing member, bad checksum: never trust it
-            try:
-                path.unlink()
-            except OSError:
-                pass
+            self.discard(key)
             return None
 
-    def store(self, key: str, drawings: ShapeDrawings) -> Path:
+    def discard(self, key: str) -> None:
+        try:
+            self.path(key).unlink()
+        except OSError:
+            pass
+
+    def store_arrays(self, key: str, arrays: dict, compress: bool = True) -> Path:
         """Write atomically: a temporary file in the same folder, then `os.replace`."""
         path = self.path(key)
         path.parent.mkdir(parents=True, exist_ok=True)
-        arrays = drawings.to_arrays()
         arrays = {k: np.asarray(v) for k, v in arrays.items()}
+        save = np.savez_compressed if compress else np.savez
         fd, tmp = tempfile.mkstemp(prefix=".tmp-", suffix=".npz", dir=path.parent)
         try:
             with os.fdopen(fd, "wb") as f:
-                np.savez_compressed(f, _key=np.array(key), _checksum=np.array(arrays_checksum(arrays)),
-                                    **arrays)
+                save(f, _key=np.array(key), _checksum=np.array(arrays_checksum(arrays)), **arrays)
                 f.flush()
                 os.fsync(f.fileno())
             os.replace(tmp, path)
@@ -99,6 +109,28 @@ class DrawingCache:
                 pass
             raise
         return path
+
+
+class DrawingCache(_NpzStore):
+    """A folder of `<key>.npz` entries."""
+
+    def __init__(self, root: str | os.PathLike | None = None):
+        super().__init__(Path(root) if root is not None else default_cache_dir())
+
+    def load(self, key: str) -> ShapeDrawings | None:
+        """The entry for `key`, or None if absent or not trustworthy (then it is removed)."""
+        arrays = self.load_arrays(key)
+        if arrays is None:
+            return None
+        try:
+            return ShapeDrawings.from_arrays(arrays)
+        except Exception:  # a member missing: not ours to trust
+            self.discard(key)
+            return None
+
+    def store(self, key: str, drawings: ShapeDrawings) -> Path:
+        """Write atomically: a temporary file in the same folder, then `os.replace`."""
+        return self.store_arrays(key, drawings.to_arrays())
 
     def get_or_compute(self, mesh: Mesh, settings, compute: Callable[[], ShapeDrawings],
                        version: str = CODE_VERSION) -> tuple[ShapeDrawings, bool]:
@@ -112,3 +144,74 @@ class DrawingCache:
         drawings = compute()
         self.store(key, drawings)
         return drawings, False
+
+
+# ---------------------------------------------------------------- what a rerun would redo
+def _package_versions(*names: str) -> dict:
+    out = {}
+    for name in names:
+        try:
+            from importlib.metadata import version
+            out[name] = version(name)
+        except Exception:  # not installed as a distribution (Blender's bundled numpy)
+            module = __import__(name)
+            out[name] = getattr(module, "__version__", "?")
+    return out
+
+
+def _source_digest(paths) -> str:
+    h = hashlib.sha256()
+    for path in sorted(paths):
+        h.update(path.name.encode())
+        h.update(path.read_bytes())
+    return h.hexdigest()[:16]
+
+
+@functools.lru_cache(maxsize=None)
+def hog_version() -> str:
+    """HOG_VERSION, numpy's and scikit-image's versions and features.py's source: an edit to how
+    maps are made never meets maps made before it."""
+    here = Path(__file__).resolve().parent
+    versions = _package_versions("numpy", "scikit-image")
+    return f"{HOG_VERSION}+{json.dumps(versions, sort_keys=True)}+" \
+        f"{_source_digest([here / 'features.py'])}"
+
+
+def images_digest(images: np.ndarray) -> str:
+    """sha256 of a shape's images (dtype, shape, bytes): everything its HOG maps depend on."""
+    return arrays_checksum({"images": images})
+
+
+def hog_key(images_sum: str, version: str | None = None) -> str:
+    """Key of the HOG maps of images whose `images_digest` is `images_sum`."""
+    payload = json.dumps({"images": images_sum, "version": version or hog_version()})
+    return hashlib.sha256(payload.encode()).hexdigest()
+
+
+class HogCache(_NpzStore):
+    """Per-shape HOG maps (`features.hog_images`) in `<root>/hog/`, one entry per shape."""
+
+    def __init__(self, root: str | os.PathLike | None = None):
+        super().__init__((Path(root) if root is not None else default_cache_dir()) / "hog")
+
+    def load(self, key: str) -> np.ndarray | None:
+        arrays = self.load_arrays(key)
+        if arrays is None or "maps" not in arrays or arrays["maps"].dtype != np.float32:
+            if arrays is not None:
+                self.discard(key)
+            return None
+        return arrays["maps"]
+
+    def store(self, key: str, maps: np.ndarray) -> Path:
+        return self.store_arrays(key, {"maps": np.ascontiguousarray(maps, np.float32)})
+
+    def get_or_compute(self, images: np.ndarray, compute: Callable[[], np.ndarray],
+                       images_sum: str | None = None) -> tuple[np.ndarray, bool]:
+        """(maps, was_cached) of `images`; `images_sum` when the caller has their digest."""
+        key = hog_key(images_sum or images_digest(images))
+        hit = self.load(key)
+        if hit is not None:
+            return hit, True
+        maps = compute()
+        self.store(key, maps)
+        return maps, False

@@ -152,14 +152,20 @@ def _run_steps(meshes: list[Mesh], options: JobOptions):
     check_shapes(options, [m.name for m in good], skipped)   # some shapes may not draw
 
     # 2. the analysis, on the first n_seeds seeds of each shape; the HOG maps are computed
-    # once here because the style regions (stage 3) read them too
+    # once here because the style regions (stage 3) read them too, and cached beside the
+    # drawings so a second run reads them (one shape at a time, as it computes them)
     from .. import pipeline
+    from ..cache import HogCache
     from ..features import MapStore, hog_images
     t0 = time.perf_counter()
+    hogs = HogCache(options.cache_dir) if options.cache_dir is not False else None
     maps = MapStore()       # on disk: a collection's maps need not fit in memory
     for i, d in enumerate(drawings):
         yield ("hog", i, len(drawings))
-        maps.append(hog_images(d.images))
+        if hogs is None:
+            maps.append(hog_images(d.images))
+        else:
+            maps.append(hogs.get_or_compute(d.images, lambda: hog_images(d.images))[0])
     timings["hog"] = time.perf_counter() - t0
     t0 = time.perf_counter()
     analysis_drawings = [seed_subset(d, options.n_seeds) for d in drawings]
