@@ -10,6 +10,9 @@ Beside it, in the same root, the same kind of store for what a second run would 
 (issue 15: a rerun on unchanged shapes should cost a small share of the first):
 - `HogCache` (`hog/`): a shape's HOG maps, keyed by a digest of its images (all HOG reads) and
   `hog_version()`, so however the drawings arrived, stale maps cannot be served.
+- `AnalysisCache` (`analysis/`): the whole `pipeline.AnalysisResult`, keyed by every shape's name
+  and drawings in input order, the analysis parameters, labels, triplets and `analysis_version()`
+  (which covers the package's source), so any change of input or code re-runs the analysis.
 """
 from __future__ import annotations
 
@@ -28,8 +31,9 @@ from .meshes import Mesh
 
 # Bump when the renderers, seeding or visibility change what they produce for the same input.
 CODE_VERSION = "drawings-3"
-# Bump when HOG maps change in a way the source digest below would not see.
+# Bump when HOG maps or the analysis change in a way the source digests below would not see.
 HOG_VERSION = "hog-1"
+ANALYSIS_VERSION = "analysis-1"
 
 
 def default_cache_dir() -> Path:
@@ -215,3 +219,110 @@ class HogCache(_NpzStore):
         maps = compute()
         self.store(key, maps)
         return maps, False
+
+
+# ---------------------------------------------------------------- the analysis
+@functools.lru_cache(maxsize=None)
+def analysis_version() -> str:
+    """ANALYSIS_VERSION, the numeric packages' versions and a digest of every source file of the
+    package: the analysis reads many modules, and a forgotten version bump must not serve a
+    result the current code would not give (an edit anywhere costs one re-analysis)."""
+    here = Path(__file__).resolve().parent
+    versions = _package_versions("numpy", "scipy", "scikit-learn", "scikit-image")
+    return f"{ANALYSIS_VERSION}+{json.dumps(versions, sort_keys=True)}+" \
+        f"{_source_digest(list(here.rglob('*.py')))}"
+
+
+def drawings_digest(drawings: ShapeDrawings, images_sum: str | None = None) -> str:
+    """sha256 of everything the analysis reads of one shape (name, images, seeds, cameras...);
+    `images_sum`: its `images_digest`, when the caller has it."""
+    arrays = drawings.to_arrays()
+    arrays.pop("images")
+    h = hashlib.sha256()
+    h.update((images_sum or images_digest(drawings.images)).encode())
+    h.update(arrays_checksum(arrays).encode())
+    return h.hexdigest()
+
+
+def analysis_key(shape_digests: list[str], params: dict, labels: dict | None,
+                 triplets: list | None, version: str | None = None) -> str:
+    """Key of one analysis: the shapes' `drawings_digest` in input order (the result is per
+    position and the analysis is not known to be order-free, so a reordered input misses), the
+    analysis parameters, the labels, the triplets (in order) and `analysis_version()`."""
+    payload = json.dumps({"shapes": list(shape_digests), "params": params,
+                          "labels": sorted((labels or {}).items(), key=lambda kv: str(kv[0])),
+                          "triplets": [list(t) for t in (triplets or [])],
+                          "version": version or analysis_version()}, sort_keys=True, default=str)
+    return hashlib.sha256(payload.encode()).hexdigest()
+
+
+_RESULT_ARRAYS = ("clusters", "fused", "confidence", "label_given", "view_weights", "words",
+                  "word_cluster", "word_score")
+_RESULT_JSON = ("names", "n_clusters", "classes", "predicted", "view_names", "rounds", "timings")
+_FILTER_JSON = ("cluster", "view", "source_shape", "source_seed", "source_pixel", "score")
+
+
+def _plain(x):
+    """json's fallback for numpy scalars and arrays."""
+    if isinstance(x, np.generic):
+        return x.item()
+    if isinstance(x, np.ndarray):
+        return x.tolist()
+    raise TypeError(f"cannot store {type(x).__name__} in the analysis cache")
+
+
+def result_to_arrays(result) -> dict:
+    """A `pipeline.AnalysisResult` as plain arrays and one JSON text (floats round-trip exactly).
+    A field this does not know raises: it would otherwise be lost from every cached result."""
+    from dataclasses import fields
+    known = set(_RESULT_ARRAYS) | set(_RESULT_JSON) | {"style_filters"}
+    unknown = sorted({f.name for f in fields(result)} - known)
+    if unknown:
+        raise TypeError(f"AnalysisResult fields {unknown} unknown to the analysis cache")
+    arrays = {f: np.asarray(getattr(result, f)) for f in _RESULT_ARRAYS
+              if getattr(result, f) is not None}
+    for i, sf in enumerate(result.style_filters):
+        arrays[f"filter_hog_{i}"] = np.asarray(sf.hog)
+    meta = {f: getattr(result, f) for f in _RESULT_JSON}
+    meta["none"] = [f for f in _RESULT_ARRAYS if getattr(result, f) is None]
+    meta["filters"] = [{f: getattr(sf, f) for f in _FILTER_JSON} for sf in result.style_filters]
+    arrays["meta"] = np.array(json.dumps(meta, default=_plain))
+    return arrays
+
+
+def result_from_arrays(arrays: dict):
+    """`result_to_arrays`' inverse."""
+    from .pipeline import AnalysisResult, StyleFilter
+    meta = json.loads(str(arrays["meta"]))
+    values = {f: (None if f in meta["none"] else arrays[f]) for f in _RESULT_ARRAYS}
+    values.update({f: meta[f] for f in _RESULT_JSON})
+    filters = []
+    for i, sf in enumerate(meta["filters"]):
+        sf["source_pixel"] = tuple(sf["source_pixel"])
+        filters.append(StyleFilter(hog=arrays[f"filter_hog_{i}"], **sf))
+    return AnalysisResult(style_filters=filters, **values)
+
+
+class AnalysisCache(_NpzStore):
+    """Whole analysis results in `<root>/analysis/`, keyed by `analysis_key`."""
+
+    def __init__(self, root: str | os.PathLike | None = None):
+        super().__init__((Path(root) if root is not None else default_cache_dir()) / "analysis")
+
+    def load(self, key: str, names: list[str]):
+        """The result for `key`, or None; an entry that does not read back, or is not about
+        `names`, is removed."""
+        arrays = self.load_arrays(key)
+        if arrays is None:
+            return None
+        try:
+            result = result_from_arrays(arrays)
+            if list(result.names) != list(names) or len(result.clusters) != len(names):
+                raise ValueError("another collection")
+            return result
+        except Exception:
+            self.discard(key)
+            return None
+
+    def store(self, key: str, result) -> Path:
+        return self.store_arrays(key, result_to_arrays(result))

@@ -1,10 +1,12 @@
-"""Issue 15: a second run on unchanged shapes reads what the first computed (HOG maps) instead of
-redoing it, gives the identical result, and never trusts a damaged or foreign entry."""
+"""Issue 15: a second run on unchanged shapes reads what the first computed (HOG maps, the
+analysis) instead of redoing it, gives the identical result, and never trusts a damaged or
+foreign entry; a changed drawing, parameter or label computes again."""
 import numpy as np
 import pytest
 
-from style_coanalysis import features
-from style_coanalysis.cache import HogCache, hog_key, images_digest
+from style_coanalysis import features, pipeline
+from style_coanalysis.cache import (AnalysisCache, HogCache, analysis_key, hog_key, images_digest,
+                                    result_from_arrays, result_to_arrays)
 
 
 def images(seed=0, n=3, size=48):
@@ -104,40 +106,126 @@ def outcome(result):
             "report_shapes": result.report["shapes"], "clusters_report": result.clusters}
 
 
+def same_result(a, b):
+    """Every field of two AnalysisResults equal (arrays exactly, dtype included)."""
+    from dataclasses import fields
+    for f in fields(a):
+        x, y = getattr(a, f.name), getattr(b, f.name)
+        if f.name == "style_filters":
+            assert len(x) == len(y)
+            for p, q in zip(x, y):
+                assert np.array_equal(p.hog, q.hog) and p.hog.dtype == q.hog.dtype
+                assert (p.cluster, p.view, p.source_shape, p.source_seed, p.source_pixel,
+                        p.score) == (q.cluster, q.view, q.source_shape, q.source_seed,
+                                     q.source_pixel, q.score)
+        elif isinstance(x, np.ndarray) or isinstance(y, np.ndarray):
+            assert np.array_equal(x, y) and np.asarray(x).dtype == np.asarray(y).dtype, f.name
+        else:
+            assert x == y, f.name
+
+
 @pytest.fixture
 def counted(monkeypatch):
-    """Counts the job's HOG computations (the job looks `hog_images` up when it runs)."""
-    calls = []
-    real = features.hog_images
+    """Counts the job's HOG computations and analyses (the job looks both up when it runs)."""
+    calls = {"hog": 0, "analyse": 0}
+    real_hog, real_analyse = features.hog_images, pipeline.analyse
 
     def hog_images(imgs):
-        calls.append(len(imgs))
-        return real(imgs)
+        calls["hog"] += 1
+        return real_hog(imgs)
+
+    def analyse(*a, **k):
+        calls["analyse"] += 1
+        return real_analyse(*a, **k)
     monkeypatch.setattr(features, "hog_images", hog_images)
+    monkeypatch.setattr(pipeline, "analyse", analyse)
     return calls
 
 
 @pytest.mark.blender
-def test_second_job_reads_the_maps_and_gives_the_same_result(tmp_path, counted):
+def test_second_job_reads_maps_and_analysis_and_gives_the_same_result(tmp_path, counted):
     pytest.importorskip("bpy")
     from style_coanalysis import sample
     from style_coanalysis.options import build_options
-    meshes = sample.generate(size=4, seed=0)
-    options = build_options(renderer="zbuffer", jobs=1, cache_dir=tmp_path, clusters=2, rounds=1)
-    first = run(meshes, options)
-    assert len(counted) == 4                           # one HOG computation per shape
-    assert len(list((tmp_path / "hog").rglob("*.npz"))) == 4
-    second = run(meshes, options)
-    assert len(counted) == 4                           # none more: every shape's maps were read
-    assert outcome(second) == outcome(first)
 
-    # a drawing setting that changes the drawings (the up axis) misses and computes again
-    other = build_options(renderer="zbuffer", jobs=1, cache_dir=tmp_path, clusters=2, rounds=1,
-                          up="y")
-    run(meshes, other)
-    assert len(counted) == 8
+    def opts(**kw):
+        return build_options(**{"renderer": "zbuffer", "jobs": 1, "cache_dir": tmp_path,
+                                "clusters": 2, "rounds": 1} | kw)
+    meshes = sample.generate(size=4, seed=0)
+    first = run(meshes, opts())
+    assert counted == {"hog": 4, "analyse": 1}          # one HOG computation per shape
+    assert len(list((tmp_path / "hog").rglob("*.npz"))) == 4
+    assert len(list((tmp_path / "analysis").rglob("*.npz"))) == 1
+    second = run(meshes, opts())
+    assert counted == {"hog": 4, "analyse": 1}          # nothing computed again
+    assert outcome(second) == outcome(first)
+    same_result(second.analysis, first.analysis)
+
+    # a changed analysis parameter, label or order re-runs the analysis on the cached maps
+    run(meshes, opts(rounds=2))
+    assert counted == {"hog": 4, "analyse": 2}
+    run(meshes, opts(labels={meshes[0].name: "a", meshes[1].name: "b"}))
+    run(meshes, opts(labels={meshes[0].name: "a", meshes[1].name: "c"}))
+    run(meshes[::-1], opts())
+    assert counted == {"hog": 4, "analyse": 5}
+    run(meshes, opts(rounds=2))                         # and that one was cached too
+    assert counted == {"hog": 4, "analyse": 5}
+
+    # a damaged analysis entry is not trusted: removed, computed again, same result
+    for path in (tmp_path / "analysis").rglob("*.npz"):
+        path.write_bytes(path.read_bytes()[:100])
+    third = run(meshes, opts())
+    assert counted == {"hog": 4, "analyse": 6}
+    assert outcome(third) == outcome(first)
+
+    # a drawing setting that changes the drawings (the up axis) misses both
+    run(meshes, opts(up="y"))
+    assert counted == {"hog": 8, "analyse": 7}
 
     # no cache asked for: nothing read, nothing written
     before = sorted(tmp_path.rglob("*.npz"))
-    run(meshes, build_options(renderer="zbuffer", jobs=1, cache_dir=False, clusters=2, rounds=1))
-    assert len(counted) == 12 and sorted(tmp_path.rglob("*.npz")) == before
+    run(meshes, opts(cache_dir=False))
+    assert counted == {"hog": 12, "analyse": 8} and sorted(tmp_path.rglob("*.npz")) == before
+
+
+def analysed(labels=None):
+    """A real analysis of four small synthetic shapes (no Blender)."""
+    from style_coanalysis.drawings import ShapeDrawings
+    from style_coanalysis.options import build_options
+    rng = np.random.default_rng(0)
+    shapes = []
+    for i in range(4):
+        imgs = images(seed=i, n=2, size=64)
+        px = rng.uniform(12, 52, (2, 6, 2)).astype(np.float32)
+        shapes.append(ShapeDrawings(f"s{i}", imgs, rng.random((2, 3, 4)),
+                                    rng.random((6, 3)).astype(np.float32),
+                                    np.arange(6, dtype=np.int32), np.ones((2, 6), bool), px,
+                                    np.ones((2, 5), bool)))
+    params = build_options(clusters=2, rounds=2).params
+    return shapes, params, pipeline.analyse(shapes, params, labels=labels)
+
+
+@pytest.mark.parametrize("labels", [None, {"s0": "x", "s3": "y"}])
+def test_analysis_result_round_trips_exactly(tmp_path, labels):
+    shapes, params, result = analysed(labels)
+    same_result(result_from_arrays(result_to_arrays(result)), result)
+    cache = AnalysisCache(tmp_path)
+    key = analysis_key(["d0", "d1", "d2", "d3"], params.as_dict(), labels, None)
+    cache.store(key, result)
+    same_result(cache.load(key, [d.name for d in shapes]), result)
+    assert cache.load(key, ["s0", "s1", "s2", "other"]) is None     # not this collection's
+    assert not cache.path(key).exists()
+
+
+def test_analysis_key_sees_every_input():
+    params = pipeline.AnalysisParams().as_dict()
+    base = analysis_key(["a", "b"], params, {"x": "1"}, None)
+    assert base == analysis_key(["a", "b"], dict(params), {"x": "1"}, None)
+    others = [analysis_key(["b", "a"], params, {"x": "1"}, None),
+              analysis_key(["a", "c"], params, {"x": "1"}, None),
+              analysis_key(["a", "b"], params | {"mu": params["mu"] + 1e-9}, {"x": "1"}, None),
+              analysis_key(["a", "b"], params, {"x": "2"}, None),
+              analysis_key(["a", "b"], params, None, None),
+              analysis_key(["a", "b"], params, None, [("a", "b", "c")]),
+              analysis_key(["a", "b"], params, {"x": "1"}, None, version="analysis-other")]
+    assert len({base, *others}) == 1 + len(others)

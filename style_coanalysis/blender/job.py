@@ -155,29 +155,42 @@ def _run_steps(meshes: list[Mesh], options: JobOptions):
     # once here because the style regions (stage 3) read them too, and cached beside the
     # drawings so a second run reads them (one shape at a time, as it computes them)
     from .. import pipeline
-    from ..cache import HogCache
+    from ..cache import AnalysisCache, HogCache, analysis_key, drawings_digest, images_digest
     from ..features import MapStore, hog_images
     t0 = time.perf_counter()
-    hogs = HogCache(options.cache_dir) if options.cache_dir is not False else None
+    cached = options.cache_dir is not False
+    hogs = HogCache(options.cache_dir) if cached else None
     maps = MapStore()       # on disk: a collection's maps need not fit in memory
+    sums = []               # each shape's images digest: the HOG key, part of the analysis key
     for i, d in enumerate(drawings):
         yield ("hog", i, len(drawings))
         if hogs is None:
             maps.append(hog_images(d.images))
-        else:
-            maps.append(hogs.get_or_compute(d.images, lambda: hog_images(d.images))[0])
+            continue
+        sums.append(images_digest(d.images))
+        maps.append(hogs.get_or_compute(d.images, lambda: hog_images(d.images), sums[i])[0])
     timings["hog"] = time.perf_counter() - t0
     t0 = time.perf_counter()
     analysis_drawings = [seed_subset(d, options.n_seeds) for d in drawings]
-    box[0] = ("analyse", 0, 1)
-    result = yield from _in_thread(
-        lambda: pipeline.analyse(analysis_drawings, options.params, labels=options.labels,
-                                 triplets=options.triplets, progress=progress,
-                                 cancel=stop, maps=maps),
-        box, cancel_flag)
+    # the same shapes, parameters and constraints as a cached run: its result, not a re-run
+    analyses = AnalysisCache(options.cache_dir) if cached else None
+    key = result = None
+    if analyses is not None:
+        key = analysis_key([drawings_digest(d, s) for d, s in zip(analysis_drawings, sums)],
+                           options.params.as_dict(), options.labels, options.triplets)
+        result = analyses.load(key, [d.name for d in analysis_drawings])
+    if result is None:
+        box[0] = ("analyse", 0, 1)
+        result = yield from _in_thread(
+            lambda: pipeline.analyse(analysis_drawings, options.params, labels=options.labels,
+                                     triplets=options.triplets, progress=progress,
+                                     cancel=stop, maps=maps),
+            box, cancel_flag)
+        for k, v in (result.timings or {}).items():
+            timings[f"analyse.{k}"] = v
+        if analyses is not None:
+            analyses.store(key, result)
     timings["analyse"] = time.perf_counter() - t0
-    for k, v in (result.timings or {}).items():
-        timings[f"analyse.{k}"] = v
 
     # 3. style regions and best views, per shape
     t0 = time.perf_counter()
