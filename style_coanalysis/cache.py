@@ -151,15 +151,21 @@ class DrawingCache(_NpzStore):
 
 
 # ---------------------------------------------------------------- what a rerun would redo
+_MODULES = {"scikit-image": "skimage", "scikit-learn": "sklearn"}
+
+
 def _package_versions(*names: str) -> dict:
+    """Distribution versions; the module's `__version__` where there is no metadata (Blender's
+    bundled numpy)."""
+    from importlib import import_module
+    from importlib.metadata import version
     out = {}
     for name in names:
         try:
-            from importlib.metadata import version
             out[name] = version(name)
-        except Exception:  # not installed as a distribution (Blender's bundled numpy)
-            module = __import__(name)
-            out[name] = getattr(module, "__version__", "?")
+        except Exception:
+            module = import_module(_MODULES.get(name, name))
+            out[name] = str(getattr(module, "__version__", "?"))
     return out
 
 

@@ -179,7 +179,9 @@ def _run_steps(meshes: list[Mesh], options: JobOptions):
         key = analysis_key([drawings_digest(d, s) for d, s in zip(analysis_drawings, sums)],
                            options.params.as_dict(), options.labels, options.triplets)
         result = analyses.load(key, [d.name for d in analysis_drawings])
-    if result is None:
+    if result is not None:
+        yield ("analyse", 1, 1, "from the cache")
+    else:
         box[0] = ("analyse", 0, 1)
         result = yield from _in_thread(
             lambda: pipeline.analyse(analysis_drawings, options.params, labels=options.labels,
