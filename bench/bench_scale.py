@@ -5,8 +5,9 @@
         [--work /tmp/sca_scale]
 
 Part 1, the whole headless job (`job.run_steps`: draw, HOG, analyse, localise) on the first N
-shapes of the sample collection, per renderer and number of jobs, from an empty drawing cache;
-then once more on the same shapes (the cache's worth: the second run over the first). Part 2, the
+shapes of the sample collection, per renderer and number of jobs, from an empty cache; then once
+more on the same shapes, which reads the drawings, HOG maps and analysis the first run cached
+(the cache's worth: the second run over the first, goal under 0.10). Part 2, the
 analysis alone, without Blender: the drawings of the benchmark's sample-120 made into N distinct
 shapes (each copy mirrored and shifted by a few pixels, so no two are alike and the graph is not
 120 cliques), generated one at a time as the analysis reads them, to see how HOG, encoding
