@@ -281,8 +281,11 @@ def result_to_arrays(result) -> dict:
     """A `pipeline.AnalysisResult` as plain arrays and one JSON text (floats round-trip exactly).
     A field this does not know raises: it would otherwise be lost from every cached result."""
     from dataclasses import fields
-    known = set(_RESULT_ARRAYS) | set(_RESULT_JSON) | {"style_filters"}
-    unknown = sorted({f.name for f in fields(result)} - known)
+
+    from .pipeline import StyleFilter
+    unknown = sorted({f.name for f in fields(result)} - set(_RESULT_ARRAYS) - set(_RESULT_JSON)
+                     - {"style_filters"})
+    unknown += sorted({f.name for f in fields(StyleFilter)} - set(_FILTER_JSON) - {"hog"})
     if unknown:
         raise TypeError(f"AnalysisResult fields {unknown} unknown to the analysis cache")
     arrays = {f: np.asarray(getattr(result, f)) for f in _RESULT_ARRAYS
