@@ -36,6 +36,7 @@ multiplied by the (unit) filter matrix in one product; no Python loop over posit
 """
 from __future__ import annotations
 
+import hashlib
 from dataclasses import dataclass
 
 import numpy as np
@@ -99,36 +100,43 @@ def representatives(descriptors: np.ndarray, k: int, random_state: int = 0) -> n
     return np.sort(np.asarray(chosen, np.int64))
 
 
-def content_keys(desc: np.ndarray, salt: int = 0) -> np.ndarray:
-    """A pseudo-random number in [0, 1) per descriptor that depends on its content only (a fixed
-    random projection of the values rounded to 1e-4, its fractional part at a fine scale)."""
-    flat = np.round(np.asarray(desc, np.float64).reshape(len(desc), -1), 4)
-    r = np.random.default_rng([12345, int(salt)]).standard_normal(flat.shape[1])
-    return np.mod(flat @ r * 1e4, 1.0)
+def patch_keys(name: str, view: np.ndarray, seed: np.ndarray, salt: int = 0) -> np.ndarray:
+    """A pseudo-random number in [0, 1) per patch that depends on where it was cut only: the
+    shape's name, the view and the seed (a 64-bit mix of the four, as in SplitMix64).
 
-
-def canonical_order(desc: np.ndarray) -> np.ndarray:
-    """An order of descriptors that depends on their content only (ties kept in place): the
-    dictionary drawn from them is then the same whatever order the shapes were read in."""
-    return np.argsort(content_keys(desc), kind="stable")
+    Not on its content: a 1e-7 change of coordinates redraws some of Freestyle's lines by a
+    pixel, and a key of the descriptor's values then drew other patches and reordered them, so
+    every dictionary word changed (issue 11). By place, the same patches are drawn, in the same
+    order, whatever order the shapes are read in, and a seed more or less changes one patch."""
+    base = int.from_bytes(hashlib.blake2b(name.encode(), digest_size=8).digest(), "little")
+    with np.errstate(over="ignore"):
+        x = (np.uint64(base) ^ np.uint64(salt) * np.uint64(0xD1B54A32D192ED03)
+             ^ np.asarray(view, np.uint64) * np.uint64(0x9E3779B97F4A7C15)
+             ^ np.asarray(seed, np.uint64) * np.uint64(0xBF58476D1CE4E5B9))
+        x = (x ^ (x >> np.uint64(30))) * np.uint64(0xBF58476D1CE4E5B9)
+        x = (x ^ (x >> np.uint64(27))) * np.uint64(0x94D049BB133111EB)
+        x = x ^ (x >> np.uint64(31))
+    return (x >> np.uint64(11)).astype(np.float64) / float(1 << 53)
 
 
 class DescriptorDraw:
     """The patch descriptors a dictionary is drawn from, gathered one shape at a time.
 
-    Non-blank descriptors only, at most `limit` of them, drawn by content (the smallest
-    `content_keys`), not by position: a patch more or less (a seed that moved when the
-    coordinates changed by 1e-7) changes the draw by that patch only, the order of the shapes
-    does not matter, and a collection of any size holds at most 2 x `limit` descriptors."""
+    Non-blank descriptors only, at most `limit` of them, drawn by place (the smallest
+    `patch_keys`), not by position in the input nor by content: the order of the shapes does
+    not matter, a patch more or less changes the draw by that patch only, a patch whose lines
+    moved by a pixel stays in the draw, and a collection of any size holds at most 2 x `limit`
+    descriptors."""
 
     def __init__(self, size: int, limit: int = 20000, salt: int = 1):
         self.size, self.limit, self.salt = size, limit, salt
         self._parts: list[tuple] = []
         self._count = 0
 
-    def add(self, maps: np.ndarray, shape: int, view: np.ndarray, seed: np.ndarray,
+    def add(self, maps: np.ndarray, shape: int, name: str, view: np.ndarray, seed: np.ndarray,
             centre: np.ndarray) -> None:
-        """Patches of one shape: its maps (V, by, bx, C), and per patch its view, seed, centre."""
+        """Patches of one shape: its maps (V, by, bx, C), index and name, and per patch its
+        view, seed and centre."""
         view = np.asarray(view, np.int64)
         if len(view) == 0:
             return
@@ -137,8 +145,9 @@ class DescriptorDraw:
         if not ok.any():
             return
         desc = desc[ok]
-        self._parts.append((content_keys(desc, self.salt), desc, np.full(len(desc), shape),
-                            view[ok], np.asarray(seed, np.int64)[ok],
+        seed = np.asarray(seed, np.int64)[ok]
+        self._parts.append((patch_keys(name, view[ok], seed, self.salt), desc,
+                            np.full(len(desc), shape), view[ok], seed,
                             np.asarray(centre, np.float32)[ok]))
         self._count += len(desc)
         if self._count > 2 * self.limit:
@@ -151,7 +160,7 @@ class DescriptorDraw:
         self._count = len(keep)
 
     def bank(self, k: int, random_state: int = 0) -> FilterBank:
-        """`k` representative patches of the drawn descriptors, in canonical order (k-means;
+        """`k` representative patches of the drawn descriptors, in the draw's order (k-means;
         each centre replaced by its nearest real patch). `bank.view` is the view the patch was
         cut from (for back-projection), not a restriction."""
         if self._count > self.limit:
@@ -161,8 +170,8 @@ class DescriptorDraw:
             return FilterBank(np.zeros((0, nb, nb, CHANNELS), np.float32), np.zeros(0, np.int64),
                               np.zeros(0, np.int64), np.zeros(0, np.int64),
                               np.zeros((0, 2), np.float32))
-        _, desc, shape, view, seed, centre = (np.concatenate(c) for c in zip(*self._parts))
-        order = canonical_order(desc)
+        keys, desc, shape, view, seed, centre = (np.concatenate(c) for c in zip(*self._parts))
+        order = np.argsort(keys, kind="stable")     # k-means++ reads them in an order by place
         pick = order[representatives(desc[order], k, random_state)]
         hogs = unit_rows(desc[pick]).reshape(desc[pick].shape)
         return FilterBank(hogs.astype(np.float32), view[pick], shape[pick], seed[pick],

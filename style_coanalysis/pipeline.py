@@ -312,7 +312,7 @@ def encode(drawings, params: AnalysisParams, maps=None, progress=None) -> Encodi
     Two passes over the shapes, one shape at a time, so memory does not grow with the HOG maps:
     1. each shape's maps (kept in a temporary `MapStore` unless `maps`, a sequence of per-shape
        maps, is given), its line character, and its inked patches offered to the two
-       dictionary draws (`DescriptorDraw`: a bounded draw by content);
+       dictionary draws (`DescriptorDraw`: a bounded draw by place);
     2. the dictionaries (k-means), then each shape's word and layout profiles from its maps.
     `drawings` may be any sequence of ShapeDrawings, read in order, one at a time."""
     prog = Progress.wrap(progress)
@@ -336,7 +336,7 @@ def encode(drawings, params: AnalysisParams, maps=None, progress=None) -> Encodi
             p = extract_patches([d], size=params.patch_size)
             n_patches += len(p)
             for draw in draws:
-                draw.add(m, i, p.view, p.seed, p.centre)
+                draw.add(m, i, d.name, p.view, p.seed, p.centre)
             lines.append(line_character(m))
             timings["patches"] += time.perf_counter() - t
         if n_patches == 0:

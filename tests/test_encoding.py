@@ -126,7 +126,7 @@ def test_the_dictionary_pools_views_and_keeps_real_patches():
     draw = DescriptorDraw(48)
     for s in range(3):                  # fed shape by shape, as encode does
         at = shape == s
-        draw.add(maps[s], s, view[at], np.flatnonzero(at), centres[at])
+        draw.add(maps[s], s, f"shape-{s}", view[at], np.flatnonzero(at), centres[at])
     bank = draw.bank(5, random_state=0)
     assert 0 < len(bank) <= 5
     desc, _ = patch_descriptors(maps.reshape(-1, *maps.shape[2:]),
@@ -138,20 +138,20 @@ def test_the_dictionary_pools_views_and_keeps_real_patches():
 
 
 def test_the_descriptor_draw_is_bounded_and_independent_of_the_shape_order():
-    """A draw capped below the number of patches keeps the same descriptors (by content) however
-    the shapes are fed, holds at most twice the cap meanwhile, and equals one capped draw of
-    them all at once."""
-    from style_coanalysis.encoding import DescriptorDraw, content_keys
+    """A draw capped below the number of patches keeps the same patches (by place) however the
+    shapes are fed, holds at most twice the cap meanwhile, and equals one capped draw of them
+    all at once."""
+    from style_coanalysis.encoding import DescriptorDraw, patch_keys
     rng = np.random.default_rng(2)
     maps = rng.random((8, 2, 12, 12, 36)).astype(np.float32)
     view = rng.integers(0, 2, (8, 30))
     centres = rng.uniform(10, 90, (8, 30, 2)).astype(np.float32)
 
-    def draw(order, limit):
+    def draw(order, limit, m=maps):
         d = DescriptorDraw(24, limit=limit, salt=3)
         held = 0
         for s in order:
-            d.add(maps[s], int(s), view[s], np.arange(30), centres[s])
+            d.add(m[s], int(s), f"shape-{s}", view[s], np.arange(30), centres[s])
             held = max(held, sum(len(p[0]) for p in d._parts))
         return d, held
 
@@ -161,9 +161,28 @@ def test_the_descriptor_draw_is_bounded_and_independent_of_the_shape_order():
     ba, bb = a.bank(6, 0), b.bank(6, 0)
     np.testing.assert_array_equal(ba.hog, bb.hog)
     np.testing.assert_array_equal(ba.shape, bb.shape)
-    # the kept descriptors are the 25 with the smallest content keys of all 240
-    desc, _ = patch_descriptors(maps.reshape(-1, 12, 12, 36),
-                                (np.arange(8)[:, None] * 2 + view).ravel(), centres.reshape(-1, 2), 24)
-    keys = np.sort(content_keys(desc, 3))[:25]
+    # the kept patches are the 25 with the smallest place keys of all 240
+    keys = np.sort(np.concatenate([patch_keys(f"shape-{s}", view[s], np.arange(30), 3)
+                                   for s in range(8)]))[:25]
     kept = np.sort(np.concatenate([p[0] for p in a._parts]))
     np.testing.assert_allclose(kept, keys)
+
+    # lines redrawn a little (every value moved by up to 1e-3): the same places are drawn and
+    # the dictionary comes from the same patches
+    c, _ = draw(range(8), 25, maps + rng.uniform(0, 1e-3, maps.shape).astype(np.float32))
+    bc = c.bank(6, 0)
+    np.testing.assert_array_equal(np.sort(np.concatenate([p[0] for p in c._parts])), kept)
+    np.testing.assert_array_equal(ba.shape, bc.shape)
+    np.testing.assert_array_equal(ba.seed, bc.seed)
+
+
+def test_patch_keys_depend_on_place_and_salt_only():
+    from style_coanalysis.encoding import patch_keys
+    v, s = np.repeat(np.arange(12), 30), np.tile(np.arange(30), 12)
+    k = patch_keys("chair_01", v, s, 1)
+    assert k.shape == (360,) and (k >= 0).all() and (k < 1).all()
+    assert len(np.unique(k)) == 360
+    np.testing.assert_array_equal(k, patch_keys("chair_01", v, s, 1))
+    assert not np.isclose(k, patch_keys("chair_02", v, s, 1)).any()
+    assert not np.isclose(k, patch_keys("chair_01", v, s, 2)).any()
+    assert 0.4 < k.mean() < 0.6                  # spread over [0, 1)
