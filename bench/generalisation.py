@@ -67,6 +67,9 @@ def main(argv=None) -> int:
     ap.add_argument("--stability-seeds", type=int, default=1,
                     help="stability over the first N seeds (each variant: one analysis per mode "
                          "and seed)")
+    ap.add_argument("--renderer", default=B.DRAWING_SETTINGS.renderer,
+                    choices=("freestyle", "lineart", "zbuffer"),
+                    help="what draws the collections (default %(default)s)")
     ap.add_argument("--out", default=None, help="output stem under bench/results "
                     "(default generalisation, generalisation_quick with --quick)")
     ap.add_argument("--table", metavar="JSON", nargs="+", default=None,
@@ -104,7 +107,7 @@ def main(argv=None) -> int:
     # saved after every collection, so a long run that is stopped keeps what it measured
     results = B.evaluate(collections, modes, methods, args.seeds, stability=not args.no_stability,
                          render_stability=render, stability_seeds=args.stability_seeds,
-                         jobs=args.jobs, on_collection=save)
+                         jobs=args.jobs, on_collection=save, renderer=args.renderer)
     save(results, complete=True)
     print(B.summary_table(results))
     print(f"\ncode {code['commit']} ({len(code['uncommitted'])} uncommitted files under "

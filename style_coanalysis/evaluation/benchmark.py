@@ -36,7 +36,7 @@ import sys
 import tempfile
 import time
 import zlib
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from functools import lru_cache
 from typing import Callable, Iterable, Sequence
 
@@ -274,7 +274,8 @@ class Collection:
         return int(len(np.unique(self.truth["style"])))
 
 
-def draw(meshes, jobs: int = 0, log: Log = _stderr, what: str = ""):
+def draw(meshes, jobs: int = 0, log: Log = _stderr, what: str = "",
+         settings: DrawingSettings = DRAWING_SETTINGS):
     """(meshes kept, drawings with the analysis' seeds, HOG maps, skipped) through the user cache."""
     from ..blender.batch import draw_collection
     from ..blender.job import seed_subset
@@ -286,7 +287,7 @@ def draw(meshes, jobs: int = 0, log: Log = _stderr, what: str = ""):
         if stage == "render" and total and (done == total or now - last[0] > 10):
             last[0] = now
             log(f"  {what} render {done}/{total}")
-    drawings, skipped = draw_collection(list(meshes), DRAWING_SETTINGS, None, jobs=jobs,
+    drawings, skipped = draw_collection(list(meshes), settings, None, jobs=jobs,
                                         progress=progress)
     by = {d.name: seed_subset(d, ANALYSIS_SEEDS) for d in drawings}
     kept = [m for m in meshes if m.name in by]
@@ -295,7 +296,8 @@ def draw(meshes, jobs: int = 0, log: Log = _stderr, what: str = ""):
     return kept, drawings, maps, skipped
 
 
-def load_collection(name: str, jobs: int = 0, log: Log = _stderr) -> Collection:
+def load_collection(name: str, jobs: int = 0, log: Log = _stderr,
+                    settings: DrawingSettings = DRAWING_SETTINGS) -> Collection:
     """Meshes -> drawings (cache or render) -> HOG maps, with the truth of the drawn shapes."""
     specs = collection_specs()
     if name not in specs:
@@ -305,7 +307,7 @@ def load_collection(name: str, jobs: int = 0, log: Log = _stderr) -> Collection:
     meshes = make()
     t_mesh = time.perf_counter() - t
     t = time.perf_counter()
-    kept, drawings, maps, skipped = draw(meshes, jobs, log, name)
+    kept, drawings, maps, skipped = draw(meshes, jobs, log, name, settings)
     truth = {k: np.array([str(m.truth[k]) for m in kept]) for k in ("style", "category")}
     return Collection(name, desc, kept, drawings, maps, truth, list(skipped),
                       {"meshes": t_mesh, "drawings_and_maps": time.perf_counter() - t})
@@ -436,7 +438,8 @@ def _run_one(coll, mode, method, seed, analyse_fn, drawings=None, maps=None):
 def evaluate(collections, modes: Sequence[str] = MODES, methods: Sequence[str] = METHODS,
              seeds=3, analyse_fn=None, stability: bool = True, render_stability=None,
              stability_seeds: int = 1, jobs: int = 0, log: Log = _stderr,
-             on_collection: Callable[[dict], None] | None = None) -> dict:
+             on_collection: Callable[[dict], None] | None = None,
+             renderer: str = DRAWING_SETTINGS.renderer) -> dict:
     """Score every (collection, mode, method, seed); baselines, chance and stability beside.
 
     `collections`: names (loaded here) or `Collection`s. `seeds`: a count or a list.
@@ -447,13 +450,15 @@ def evaluate(collections, modes: Sequence[str] = MODES, methods: Sequence[str] =
     scaled by 1.0000001 and loaded from OBJ files and from a .blend (new renders); over the
     first `stability_seeds` seeds (each variant costs one analysis per mode and seed).
     `on_collection(results_so_far)` is called after each collection (to save partial results).
+    `renderer` draws the collections (and the stability variants) named here.
     Returns a JSON-ready dict; `summary_table` turns it into Markdown."""
     seeds = list(range(seeds)) if isinstance(seeds, (int, np.integer)) else [int(s) for s in seeds]
     fn = analyse_fn or default_analyse
     _PAPER_STATE["identical_to_default"] = False
     if render_stability is None:
         render_stability = RENDER_STABILITY_DEFAULT
-    out = {"settings": {"drawing": DRAWING_SETTINGS.key(), "analysis_seeds": ANALYSIS_SEEDS,
+    settings = replace(DRAWING_SETTINGS, renderer=renderer)
+    out = {"settings": {"drawing": settings.key(), "analysis_seeds": ANALYSIS_SEEDS,
                         "modes": list(modes), "methods": list(methods), "seeds": seeds,
                         "analyse_fn": getattr(fn, "__qualname__", str(fn)),
                         "stability_seeds": seeds[:max(1, stability_seeds)] if stability else [],
@@ -466,7 +471,7 @@ def evaluate(collections, modes: Sequence[str] = MODES, methods: Sequence[str] =
         else:
             log(f"[{time.perf_counter() - t_all:7.1f} s] loading {item}")
             try:
-                coll = load_collection(item, jobs=jobs, log=log)
+                coll = load_collection(item, jobs=jobs, log=log, settings=settings)
             except CollectionUnavailable as exc:
                 log(f"  skipped {item}: {exc}")
                 out["skipped_collections"][item] = str(exc)
@@ -513,7 +518,7 @@ def evaluate(collections, modes: Sequence[str] = MODES, methods: Sequence[str] =
         if stability:
             do_render = render_stability is True or coll.name in tuple(render_stability)
             entry["stability"] = stability_for(coll, seeds[:max(1, stability_seeds)], fn,
-                                               partitions, do_render, jobs, log)
+                                               partitions, do_render, jobs, log, settings)
         for key in list(partitions):
             partitions[key] = None
         entry["seconds_total"] = time.perf_counter() - t_all
@@ -600,7 +605,8 @@ def _variant_through_blender(meshes, kind: str, workdir: str):
 
 
 def stability_for(coll: Collection, seeds, analyse_fn, partitions: dict, render: bool,
-                  jobs: int = 0, log: Log = _stderr) -> dict:
+                  jobs: int = 0, log: Log = _stderr,
+                  settings: DrawingSettings = DRAWING_SETTINGS) -> dict:
     """ARI of the default method's partition (auto k, k given) under each variant, per seed."""
     modes = ("auto", "k")
     ref = {}
@@ -624,7 +630,8 @@ def stability_for(coll: Collection, seeds, analyse_fn, partitions: dict, render:
                 t = time.perf_counter()
                 try:
                     meshes = variant_meshes(coll.meshes, kind, work)
-                    _, drawings, maps, skipped = draw(meshes, jobs, log, f"{coll.name}/{kind}")
+                    _, drawings, maps, skipped = draw(meshes, jobs, log, f"{coll.name}/{kind}",
+                                                      settings)
                 except Exception as exc:   # noqa: BLE001
                     out["variants"][kind] = {"n/a": f"{type(exc).__name__}: {exc}"}
                     log(f"  stability {kind}: n/a ({exc})")
