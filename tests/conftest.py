@@ -8,6 +8,7 @@ import importlib.util
 import sys
 from pathlib import Path
 
+import numpy as np
 import pytest
 
 ROOT = Path(__file__).resolve().parent.parent
@@ -32,3 +33,23 @@ def ext():
     module.register()
     yield module
     module.unregister()
+
+
+DAMAGES = ("truncate", "flip", "swap")
+
+
+def damage_entry(path: Path, how: str, array: str, other: Path) -> None:
+    """Spoil a cache entry (.npz) the ways a disk or a person can: cut short, one value of
+    `array` changed inside a valid zip (only the checksum can tell), or another entry's valid
+    file (`other`) put in its place."""
+    if how == "truncate":
+        raw = path.read_bytes()
+        path.write_bytes(raw[: len(raw) // 2])
+    elif how == "flip":
+        with np.load(path) as z:
+            arrays = {k: z[k] for k in z.files}
+        arrays[array] = arrays[array].copy()
+        arrays[array].flat[np.argmax(arrays[array])] += 0.5
+        np.savez(path, **arrays)
+    else:
+        path.write_bytes(other.read_bytes())

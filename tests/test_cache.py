@@ -2,6 +2,7 @@
 import numpy as np
 import pytest
 
+from conftest import DAMAGES, damage_entry
 from style_coanalysis.cache import DrawingCache, cache_key, default_cache_dir
 from style_coanalysis.drawings import ShapeDrawings
 from style_coanalysis.meshes import Mesh, normalise
@@ -57,27 +58,15 @@ def test_moved_vertex_or_other_settings_miss(tmp_path):
                 cache_key(tetra(), DrawingSettings(seed=1))}) == 3
 
 
-@pytest.mark.parametrize("damage", ["truncate", "flip", "swap"])
+@pytest.mark.parametrize("damage", DAMAGES)
 def test_damaged_entry_is_recomputed(tmp_path, damage):
     cache, mesh, s = DrawingCache(tmp_path), tetra(), DrawingSettings()
     compute = Counter(mesh)
     good, _ = cache.get_or_compute(mesh, s, compute)
     path = cache.path(cache_key(mesh, s))
-    raw = path.read_bytes()
-    if damage == "truncate":
-        path.write_bytes(raw[: len(raw) // 2])
-    elif damage == "flip":
-        # rewrite one array inside a valid zip: only the checksum can tell
-        with np.load(path) as z:
-            arrays = {k: z[k] for k in z.files}
-        arrays["images"] = arrays["images"].copy()
-        arrays["images"][0, 0, 0] += 0.5
-        np.savez(path, **arrays)
-    else:
-        # another shape's valid entry under this key
-        other = tetra(shift=0.5)
-        cache.get_or_compute(other, s, Counter(other))
-        path.write_bytes(cache.path(cache_key(other, s)).read_bytes())
+    other = tetra(shift=0.5)                          # another shape's valid entry
+    cache.get_or_compute(other, s, Counter(other))
+    damage_entry(path, damage, "images", cache.path(cache_key(other, s)))
     assert cache.load(cache_key(mesh, s)) is None
     assert not path.exists()                          # the bad entry is gone
     again, cached = cache.get_or_compute(mesh, s, compute)

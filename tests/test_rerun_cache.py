@@ -4,6 +4,7 @@ foreign entry; a changed drawing, parameter or label computes again."""
 import numpy as np
 import pytest
 
+from conftest import DAMAGES, damage_entry
 from style_coanalysis import features, pipeline
 from style_coanalysis.cache import (AnalysisCache, HogCache, analysis_key, hog_key, images_digest,
                                     result_from_arrays, result_to_arrays)
@@ -54,28 +55,16 @@ def test_other_images_or_version_miss(tmp_path):
     assert hog_key(images_digest(imgs)) != hog_key(images_digest(imgs.astype(np.float64)))
 
 
-@pytest.mark.parametrize("damage", ["truncate", "flip", "swap"])
+@pytest.mark.parametrize("damage", DAMAGES)
 def test_damaged_hog_entry_is_recomputed(tmp_path, damage):
     cache, imgs = HogCache(tmp_path), images()
     compute = Counter(imgs)
     good, _ = cache.get_or_compute(imgs, compute)
     key = hog_key(images_digest(imgs))
     path = cache.path(key)
-    raw = path.read_bytes()
-    if damage == "truncate":
-        path.write_bytes(raw[: len(raw) // 2])
-    elif damage == "flip":
-        # rewrite the maps inside a valid zip: only the checksum can tell
-        with np.load(path) as z:
-            arrays = {k: z[k] for k in z.files}
-        arrays["maps"] = arrays["maps"].copy()
-        arrays["maps"].flat[np.argmax(arrays["maps"])] += 0.5
-        np.savez(path, **arrays)
-    else:
-        # another shape's valid entry under this key
-        other = images(seed=1)
-        cache.get_or_compute(other, Counter(other))
-        path.write_bytes(cache.path(hog_key(images_digest(other))).read_bytes())
+    other = images(seed=1)                            # another shape's valid entry
+    cache.get_or_compute(other, Counter(other))
+    damage_entry(path, damage, "maps", cache.path(hog_key(images_digest(other))))
     assert cache.load(key) is None
     assert not path.exists()                          # the bad entry is gone
     again, cached = cache.get_or_compute(imgs, compute)
