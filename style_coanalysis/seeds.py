@@ -7,10 +7,13 @@ farthest-point subset (kept apart, but it favours corners and rims), then relax 
 (Lloyd) over the candidates until it settles and snap each centre to its nearest candidate:
 every seed lies on the surface, density follows area, seeds keep apart without piling onto edges.
 
-Deterministic for a given seed, and stable: the farthest-point walk starts from a place on the
-shape (the candidate farthest from their centroid), not from a drawn index, so a candidate that
-the visibility filter keeps or drops after a 1e-7 change of coordinates moves the seeds near it
-at most, instead of every seed (issue 11: 9 of the sample's 120 shapes got other seeds that way).
+Deterministic for a given seed, and stable (issue 11): the candidates are placed by face and a
+hash, not by a draw from the running sum of the face areas (`sample_surface`), and the
+farthest-point walk starts from a place on the shape (the candidate farthest from their
+centroid), not from a drawn index, so a candidate that the visibility filter keeps or drops after
+a small change of coordinates moves the seeds near it at most. Measured on 60 sample shapes, 90
+seeds, no visibility filter: seeds that moved on a mesh written to OBJ and read back, 50 shapes
+before, 8 now; with coordinates x 1.0000001, 11 before, none now.
 """
 from __future__ import annotations
 
@@ -30,20 +33,43 @@ LLOYD_MAX_STEPS = 300
 
 
 def sample_surface(vertices: np.ndarray, faces: np.ndarray, n: int,
-                   rng: np.random.Generator) -> tuple[np.ndarray, np.ndarray]:
-    """`n` area-weighted uniform random points on the triangles: (points (n,3) float64, faces (n,))."""
+                   seed: int = 0) -> tuple[np.ndarray, np.ndarray]:
+    """About `n` points spread over the triangles by area: (points (m,3) float64, faces (m,)).
+
+    Each face gets floor(n * area share + u) points, u a uniform number of its own (systematic
+    sampling: the expected count is n * share), at barycentric coordinates drawn from a hash of
+    (face, point, seed). Nothing depends on a running sum over all faces, so a 1e-6 change of
+    the coordinates (a mesh written to OBJ and read back) moves the points by as much and
+    changes a count only where n * share + u sits within 1e-6 of an integer; a draw from the
+    cumulative areas (numpy's choice) put several of a shape's 3,600 candidates on other faces."""
     areas = face_areas(vertices, faces)
     total = areas.sum()
     if not total > 0:
         raise InputError("cannot sample a surface with zero area")
-    face_idx = rng.choice(len(faces), size=n, p=areas / total)
+    f = np.arange(len(faces), dtype=np.uint64)
+    counts = np.floor(n * areas / total + _hash_uniform(f, 0, seed)).astype(np.int64)
+    face_idx = np.repeat(np.arange(len(faces)), counts)
+    k = np.arange(len(face_idx)) - np.repeat(np.cumsum(counts) - counts, counts)
+    u = _hash_uniform(face_idx.astype(np.uint64), 2 * k + 1, seed)
+    v = _hash_uniform(face_idx.astype(np.uint64), 2 * k + 2, seed)
     # uniform barycentric coordinates by folding the unit square onto the triangle
-    u, v = rng.random(n), rng.random(n)
     fold = u + v > 1.0
     u[fold], v[fold] = 1.0 - u[fold], 1.0 - v[fold]
     tri = vertices[faces[face_idx]].astype(np.float64)
     points = tri[:, 0] + u[:, None] * (tri[:, 1] - tri[:, 0]) + v[:, None] * (tri[:, 2] - tri[:, 0])
     return points, face_idx
+
+
+def _hash_uniform(face: np.ndarray, k, seed: int) -> np.ndarray:
+    """A uniform number in [0, 1) for each (face, k, seed): SplitMix64's mix of the three."""
+    with np.errstate(over="ignore"):
+        x = (np.asarray(face, np.uint64) * np.uint64(0x9E3779B97F4A7C15)
+             ^ np.asarray(k, np.uint64) * np.uint64(0xD1B54A32D192ED03)
+             ^ np.uint64(seed) * np.uint64(0xBF58476D1CE4E5B9))
+        x = (x ^ (x >> np.uint64(30))) * np.uint64(0xBF58476D1CE4E5B9)
+        x = (x ^ (x >> np.uint64(27))) * np.uint64(0x94D049BB133111EB)
+        x = x ^ (x >> np.uint64(31))
+    return (x >> np.uint64(11)).astype(np.float64) / float(1 << 53)
 
 
 def farthest_point_order(points: np.ndarray, n: int, start: int = 0) -> np.ndarray:
@@ -71,9 +97,8 @@ def sample_seeds(mesh: Mesh, n: int, seed: int = 0,
     """
     if n <= 0:
         return np.zeros((0, 3), np.float32), np.zeros(0, np.int32)
-    rng = np.random.default_rng(seed)
     m = max(MIN_CANDIDATES, CANDIDATES_PER_SEED * n)
-    cand, cand_faces = sample_surface(mesh.vertices, mesh.faces, m, rng)
+    cand, cand_faces = sample_surface(mesh.vertices, mesh.faces, m, seed)
     if keep is not None:
         mask = np.asarray(keep(cand, cand_faces), bool)
         if mask.sum() >= n:
