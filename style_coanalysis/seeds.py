@@ -24,6 +24,7 @@ import warnings
 import numpy as np
 from scipy.cluster.vq import kmeans2
 
+from .hashing import uniform
 from .meshes import InputError, Mesh, face_areas
 
 CANDIDATES_PER_SEED = 40     # enough candidates that the farthest-point pick is nearly even
@@ -46,30 +47,18 @@ def sample_surface(vertices: np.ndarray, faces: np.ndarray, n: int,
     total = areas.sum()
     if not total > 0:
         raise InputError("cannot sample a surface with zero area")
-    f = np.arange(len(faces), dtype=np.uint64)
-    counts = np.floor(n * areas / total + _hash_uniform(f, 0, seed)).astype(np.int64)
+    f = np.arange(len(faces))
+    counts = np.floor(n * areas / total + uniform(f, 0, seed)).astype(np.int64)
     face_idx = np.repeat(np.arange(len(faces)), counts)
     k = np.arange(len(face_idx)) - np.repeat(np.cumsum(counts) - counts, counts)
-    u = _hash_uniform(face_idx.astype(np.uint64), 2 * k + 1, seed)
-    v = _hash_uniform(face_idx.astype(np.uint64), 2 * k + 2, seed)
+    u = uniform(face_idx, 2 * k + 1, seed)
+    v = uniform(face_idx, 2 * k + 2, seed)
     # uniform barycentric coordinates by folding the unit square onto the triangle
     fold = u + v > 1.0
     u[fold], v[fold] = 1.0 - u[fold], 1.0 - v[fold]
     tri = vertices[faces[face_idx]].astype(np.float64)
     points = tri[:, 0] + u[:, None] * (tri[:, 1] - tri[:, 0]) + v[:, None] * (tri[:, 2] - tri[:, 0])
     return points, face_idx
-
-
-def _hash_uniform(face: np.ndarray, k, seed: int) -> np.ndarray:
-    """A uniform number in [0, 1) for each (face, k, seed): SplitMix64's mix of the three."""
-    with np.errstate(over="ignore"):
-        x = (np.asarray(face, np.uint64) * np.uint64(0x9E3779B97F4A7C15)
-             ^ np.asarray(k, np.uint64) * np.uint64(0xD1B54A32D192ED03)
-             ^ np.uint64(seed) * np.uint64(0xBF58476D1CE4E5B9))
-        x = (x ^ (x >> np.uint64(30))) * np.uint64(0xBF58476D1CE4E5B9)
-        x = (x ^ (x >> np.uint64(27))) * np.uint64(0x94D049BB133111EB)
-        x = x ^ (x >> np.uint64(31))
-    return (x >> np.uint64(11)).astype(np.float64) / float(1 << 53)
 
 
 def farthest_point_order(points: np.ndarray, n: int, start: int = 0) -> np.ndarray:

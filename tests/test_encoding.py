@@ -186,3 +186,21 @@ def test_patch_keys_depend_on_place_and_salt_only():
     assert not np.isclose(k, patch_keys("chair_02", v, s, 1)).any()
     assert not np.isclose(k, patch_keys("chair_01", v, s, 2)).any()
     assert 0.4 < k.mean() < 0.6                  # spread over [0, 1)
+
+
+def test_the_key_driven_kmeans_start_follows_small_changes_and_spreads():
+    """A few descriptors changed a little (lines redrawn by a pixel) leave the k-means++ start
+    nearly as it was; it is a k-means++ start (spread out), and the seed changes it."""
+    from style_coanalysis.encoding import plusplus_by_key
+    rng = np.random.default_rng(4)
+    x = rng.normal(0, 1, (60, 16))[rng.integers(0, 60, 3000)] + rng.normal(0, 0.05, (3000, 16))
+    keys = rng.random(3000)
+    a = plusplus_by_key(x, keys, 60, 0)
+    y = x.copy()
+    y[rng.choice(3000, 10, replace=False)] += rng.normal(0, 1e-3, (10, 16))
+    b = plusplus_by_key(y, keys, 60, 0)
+    assert len(set(a) & set(b)) >= 57
+    assert len(set(a) & set(plusplus_by_key(x, keys, 60, 1))) < 20
+    def potential(idx):                           # what k-means++ keeps low: d^2 to the start
+        return (((x[:, None] - x[idx][None]) ** 2).sum(axis=2).min(axis=1)).sum()
+    assert potential(a) < min(potential(rng.choice(3000, 60, replace=False)) for _ in range(5))
