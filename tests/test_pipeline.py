@@ -161,21 +161,27 @@ def test_structure_relative_words_cancel_what_structural_look_alikes_share():
 
 
 def test_look_alike_means_match_a_direct_computation_across_row_blocks():
-    """The blocked, cumulative ladder gives each rung's mean over exactly the k nearest
-    structural neighbours (a collection larger than one block of rows)."""
+    """The blocked ladder gives each rung's mean over exactly the k nearest structural
+    neighbours, or, past RUNG_SAMPLE of them, over RUNG_SAMPLE spread evenly by rank from the
+    nearest to the k-th (a collection larger than one block of rows)."""
     from sklearn.metrics import pairwise_distances
-    from style_coanalysis.views import BLOCK, look_alikes, neighbour_ladder, structure_relative
+    from style_coanalysis.views import (BLOCK, RUNG_SAMPLE, look_alikes, neighbour_ladder,
+                                        rung_ranks, structure_relative)
     rng = np.random.default_rng(3)
     n = BLOCK + 77
     layout, words = rng.random((n, 6)), rng.random((n, 9))
     ks = neighbour_ladder(n)
+    assert max(k for k in ks if k < n - 1) > RUNG_SAMPLE >= min(ks)
     near = look_alikes(layout, max(k for k in ks if k < n - 1))
     s = (layout - layout.mean(0)) / layout.std(0)
     d = pairwise_distances(s)
     np.fill_diagonal(d, np.inf)
     order = np.argsort(d, axis=1)
     for k, r in zip(ks, structure_relative(words, near, ks)):
-        expect = words - (words[order[:, :k]].mean(axis=1) if k < n - 1 else words.mean(0))
+        ranks = rung_ranks(k)
+        assert len(ranks) == min(k, RUNG_SAMPLE) and ranks[0] == 0 and ranks[-1] == k - 1
+        assert np.all(np.diff(ranks) > 0)
+        expect = words - (words[order[:, ranks]].mean(axis=1) if k < n - 1 else words.mean(0))
         np.testing.assert_allclose(r, expect, atol=1e-9)
 
 
