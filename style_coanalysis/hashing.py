@@ -6,6 +6,8 @@ pixel) changes the draws of all that follow. A hash of an item's own identity do
 (issue 11). SplitMix64's finaliser mixes the parts."""
 from __future__ import annotations
 
+import hashlib
+
 import numpy as np
 
 _GOLDEN = (0x9E3779B97F4A7C15, 0xD1B54A32D192ED03, 0xBF58476D1CE4E5B9, 0x94D049BB133111EB)
@@ -32,5 +34,4 @@ def uniform(*parts) -> np.ndarray:
 
 def name_id(name: str) -> int:
     """A 63-bit integer from a text (a shape's name), the same on every machine and run."""
-    import hashlib
     return int.from_bytes(hashlib.blake2b(name.encode(), digest_size=8).digest(), "little") >> 1

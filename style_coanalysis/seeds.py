@@ -17,9 +17,8 @@ before, 8 now; with coordinates x 1.0000001, 11 before, none now.
 """
 from __future__ import annotations
 
-from typing import Callable
-
 import warnings
+from typing import Callable
 
 import numpy as np
 from scipy.cluster.vq import kmeans2
