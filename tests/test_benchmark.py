@@ -151,12 +151,14 @@ def test_loop_stability_and_table_with_a_stand_in_analysis():
     assert e["stability"]["min_auto"] == pytest.approx(1.0)
     assert e["stability"]["min_k"] == pytest.approx(1.0)
     assert len(e["stability"]["variants"]) == B.STABILITY_ORDERS
+    # the yardstick: the oracle ignores the seed, so another seed gives the same partition
+    assert e["stability"]["another_seed"]["k"]["min"] == pytest.approx(1.0)
     # k given where it should be, labels only in label modes, 2 per style
     assert ("default", 2, None, None) in seen and ("default", None, None, None) in seen
     assert any(lab is not None and len(lab) == 4 for _, _, lab, _ in seen)
     table = B.summary_table(res)
     assert "| fake | 12 | 2 | k | 1.00 ± 0.00 | n/a |" in table
-    assert "order-0" in table
+    assert "order-0" in table and "| 1.00 / 1.00 | 1.00 / 1.00 |" in table
 
 
 def test_collection_names_and_prefixes():

@@ -607,7 +607,9 @@ def _variant_through_blender(meshes, kind: str, workdir: str):
 def stability_for(coll: Collection, seeds, analyse_fn, partitions: dict, render: bool,
                   jobs: int = 0, log: Log = _stderr,
                   settings: DrawingSettings = DRAWING_SETTINGS) -> dict:
-    """ARI of the default method's partition (auto k, k given) under each variant, per seed."""
+    """ARI of the default method's partition (auto k, k given) under each variant, per seed;
+    beside them, as a yardstick, the ARI with the next analysis seed on the same drawings (how
+    much the partition moves with the method's own random choices): not counted as a variant."""
     modes = ("auto", "k")
     ref = {}
     for mode in modes:
@@ -618,12 +620,23 @@ def stability_for(coll: Collection, seeds, analyse_fn, partitions: dict, render:
             else:
                 pred, err, _, _ = _run_one(coll, mode, "default", seed, analyse_fn)
                 ref[mode, seed] = pred
+    yardstick = {}
+    for mode in modes:
+        aris = []
+        for seed in seeds:
+            pred, err, _, _ = _run_one(coll, mode, "default", seed + 1, analyse_fn)
+            aris.append(None if err or ref[mode, seed] is None else
+                        float(metrics.ari(pred, ref[mode, seed])))
+        good = [a for a in aris if a is not None]
+        yardstick[mode] = {"ari": aris, "min": float(np.min(good)) if good else None}
+    log(f"  stability yardstick, another analysis seed: ARI auto "
+        f"{_fmt(yardstick['auto']['min'])}, k {_fmt(yardstick['k']['min'])}")
     variants = {}
     n = len(coll.drawings)
     for i in range(STABILITY_ORDERS):
         perm = np.random.default_rng(7000 + i).permutation(n)
         variants[f"order-{i}"] = ([coll.drawings[j] for j in perm], coll.maps[perm])
-    out = {"variants": {}, "render_variants": render}
+    out = {"variants": {}, "render_variants": render, "another_seed": yardstick}
     if render:
         with tempfile.TemporaryDirectory(prefix="style_bench_") as work:
             for kind in RENDER_VARIANTS:
@@ -729,9 +742,10 @@ def summary_table(results: dict) -> str:
         lines += ["", "Stability: ARI between the default method's partitions (minimum over "
                   "seeds), auto k / k given; order-i = same shapes in a shuffled list, scaled = "
                   "coordinates x 1.0000001, obj / blend = written and read back through the "
-                  "Blender adapter (new renders).", "",
-                  "| collection | " + " | ".join(kinds) + " | worst |",
-                  "|---|" + "---|" * (len(kinds) + 1)]
+                  "Blender adapter (new renders); another seed = the next analysis seed on the "
+                  "same drawings (a yardstick, not in worst).", "",
+                  "| collection | " + " | ".join(kinds) + " | worst | another seed |",
+                  "|---|" + "---|" * (len(kinds) + 2)]
         for name, s in stab.items():
             cells = []
             for kind in kinds:
@@ -742,8 +756,11 @@ def summary_table(results: dict) -> str:
                     cells.append("n/a")
                 else:
                     cells.append(f"{_fmt(r['auto']['min'], 2)} / {_fmt(r['k']['min'], 2)}")
+            seed = s.get("another_seed")
+            other = (f"{_fmt(seed['auto']['min'], 2)} / {_fmt(seed['k']['min'], 2)}" if seed
+                     else "-")
             lines.append(f"| {name} | " + " | ".join(cells) +
-                         f" | {_fmt(s['min_auto'], 2)} / {_fmt(s['min_k'], 2)} |")
+                         f" | {_fmt(s['min_auto'], 2)} / {_fmt(s['min_k'], 2)} | {other} |")
     return "\n".join(lines)
 
 
