@@ -133,7 +133,6 @@ class DrawingCache(_NpzStore):
             return None
 
     def store(self, key: str, drawings: ShapeDrawings) -> Path:
-        """Write atomically: a temporary file in the same folder, then `os.replace`."""
         return self.store_arrays(key, drawings.to_arrays())
 
     def get_or_compute(self, mesh: Mesh, settings, compute: Callable[[], ShapeDrawings],
