@@ -35,6 +35,7 @@ class AnalysisParams:
     patch_size: int = 24                 # pixels, style patches/filters (paper: 48; see pipeline)
     n_representatives: int = 50          # k-means centres of the layout (structure) dictionary
     n_words: int = 200                   # k-means centres of the style dictionary (all views)
+    n_dictionaries: int = 5              # dictionaries drawn independently; their graphs averaged
     structure_patch_size: int = 48       # pixels, layout patches used to find structural look-alikes
     n_style_dims: int = 10               # principal directions kept per view; spectral coordinates
     min_filters: int = 5                 # reselection keeps at least this many filters

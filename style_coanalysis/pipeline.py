@@ -1,8 +1,9 @@
 """The whole analysis in one call (paper 4.1-4.5): drawings in, style clusters and style words out.
 
-    patches (24 px) -> HOG maps -> one dictionary of style words for all views
-    -> per shape: word profile, layout profile (48 px words), line character
-    -> [views (views.fusion_views) -> style graph (graph.py) -> clusters -> reselect words]*
+    patches (24 px) -> HOG maps -> several dictionaries of style words, each for all views
+    -> per shape and dictionary: word profile, layout profile (48 px words); line character
+    -> [views (views.word_views, line character) -> style graph (graph.py) -> clusters
+        -> reselect each dictionary's words]*
 
 `params.method == "paper"` runs the paper's own method instead (paper_method.py), the baseline
 every figure of the default is compared with.
@@ -12,8 +13,11 @@ Why not the paper's pipeline as written: on the sample it clustered by category 
 statistics (README, "where it departs from the paper"). The default keeps its stages (patches,
 HOG, representative patches, encoding, fusion of several views, clustering, reselection until
 stable) but each stage is made to hold on collections it was not tuned on:
-* one dictionary of small patches for all views, counted over all views (shapes are upright but
-  not azimuth-aligned; ornament is small at 200 px);
+* dictionaries of small patches for all views, counted over all views (shapes are upright but
+  not azimuth-aligned; ornament is small at 200 px); several are drawn independently
+  (`params.n_dictionaries`) and every one's views enter the style graph, so the cut does not
+  hang on which patches one draw happened to pick (where the cut is ambiguous, a few words
+  redrawn by a 1e-7 change of coordinates moved it: issue 11, README);
 * the views are the word profile relative to structural look-alikes at every scale of a ladder,
   plus the line character (views.py), fused as graphs (graph.py): no neighbour count or
   collection fraction is chosen for the collection at hand;
@@ -42,12 +46,13 @@ from .constraints import labels_to_array, triplets_to_array, validate_labels, va
 from .drawings import ShapeDrawings
 from .encoding import DescriptorDraw, FilterBank, frequency_features, word_counts
 from .features import MapStore, hog_images, line_character
+from .hashing import uniform
 from .meshes import InputError
 from .params import AnalysisParams
 from .patches import extract_patches
 from .progress import Progress
 from .reselection import reselect
-from .views import fusion_views, look_alikes, neighbour_ladder, structure_relative
+from .views import look_alikes, neighbour_ladder, structure_relative, style_space, word_views
 
 FUSIONS = ("graph", "pslf", "concat", "pca", "cca")
 
@@ -153,6 +158,16 @@ def _soft_confidence(x: np.ndarray, clusters: np.ndarray) -> np.ndarray:
     return p[np.arange(len(x)), np.searchsorted(ids, clusters)]
 
 
+def _graphs(views, n_edges: int = graph.N_EDGES) -> list:
+    """graph.affinity of each view; a view that recurs (the line character, once per
+    dictionary) is computed once."""
+    made = {}
+    for v in views:
+        if id(v) not in made:
+            made[id(v)] = graph.affinity(v, n_edges=n_edges)
+    return [made[id(v)] for v in views]
+
+
 def _style_graph(views, params, y, fusion):
     """The fused style graph (N, N) and the weight of each view in it.
 
@@ -160,7 +175,7 @@ def _style_graph(views, params, y, fusion):
     features first and build one graph of the result, for comparison: "pslf" (paper 4.3, its
     learned view weights; the views shifted to be non-negative), "concat", "pca", "cca"."""
     if fusion == "graph":
-        graphs = [graph.affinity(v) for v in views]
+        graphs = _graphs(views)
         weights = np.full(len(views), 1.0 / len(views))
         return graph.fuse(graphs, weights), weights
     shifted = [v - v.min(axis=0) for v in views]
@@ -276,6 +291,22 @@ def _coordinates(a: np.ndarray, params: AnalysisParams) -> np.ndarray:
     return u[:, 1:]
 
 
+def _views(dicts, keeps, lines, n_dims):
+    """Every dictionary's word views (views.word_views, its kept words only), their names (one per
+    kind: the ladder's rungs, then line character) and each view's kind. The line-character
+    view is the same for every dictionary and is computed once, but counted once per
+    dictionary, so its share of the fused graph does not change with their number."""
+    views, kinds, names = [], [], []
+    for d, keep in zip(dicts, keeps):
+        v, names = word_views(d.words[:, keep], d.neighbours, n_dims)
+        views += v
+        kinds += range(len(v))
+    line_view = style_space(lines, n_dims)
+    views += [line_view] * len(dicts)
+    kinds += [len(names)] * len(dicts)
+    return views, names + ["line character"], np.asarray(kinds)
+
+
 def _choose_n_clusters(views, a, fusion: str, n: int) -> int:
     """The number of clusters at the largest spectral gap (graph.choose_n_clusters), read on the
     views' graphs with twice the style graph's edges (the default fusion; other fusions: their
@@ -283,7 +314,7 @@ def _choose_n_clusters(views, a, fusion: str, n: int) -> int:
     generalisation benchmark (17 collections, 3 seeds) the gap of the 20-edge style graph was
     right on 17 of 51 runs, of a 40-edge one on 24, of the dense graph on 25."""
     if fusion == "graph":
-        a = graph.fuse([graph.affinity(v, n_edges=2 * graph.N_EDGES) for v in views])
+        a = graph.fuse(_graphs(views, 2 * graph.N_EDGES))
     return graph.choose_n_clusters(a, _max_clusters(n))
 
 
@@ -293,37 +324,57 @@ def _max_clusters(n: int) -> int:
 
 
 @dataclass
-class Encoding:
-    """A collection's encoding (`encode`): what the clustering rounds read. It depends on the
-    drawings and the dictionary parameters only, so one encoding serves every mode."""
+class Dictionary:
+    """One drawn dictionary of style words and what the clustering rounds read through it."""
 
     bank: FilterBank             # the style words (24 px patches)
     words: np.ndarray            # (N, K) word profile
     layout: np.ndarray           # (N, K') layout profile (48 px words)
-    lines: np.ndarray            # (N, L) line character
     neighbours: np.ndarray       # (N, k) structural look-alikes, nearest first (views.look_alikes)
     relative: np.ndarray         # (N, K) word profile relative to look-alikes, mean over ladder
+
+
+@dataclass
+class Encoding:
+    """A collection's encoding (`encode`): what the clustering rounds read. It depends on the
+    drawings and the dictionary parameters only, so one encoding serves every mode.
+    `dictionaries[0]` is drawn with the analysis seed itself; its words are the ones the result
+    reports and marks on the meshes."""
+
+    dictionaries: list[Dictionary]
+    lines: np.ndarray            # (N, L) line character
     timings: dict = field(default_factory=dict)
+
+
+def dictionary_state(random_state: int, member: int) -> int:
+    """The seed of the `member`-th dictionary drawn for an analysis seed (the first: the seed)."""
+    if member == 0:
+        return int(random_state)
+    return int(uniform(int(random_state) & 0xFFFFFFFF, member) * 2 ** 31)
 
 
 def encode(drawings, params: AnalysisParams, maps=None, progress=None) -> Encoding:
     """Patches -> HOG maps -> dictionaries -> word, layout and line profiles of every shape.
 
+    `params.n_dictionaries` dictionaries are drawn independently (different seeds, so different
+    patches and k-means starts), each a pair: style words (24 px) and layout words (48 px).
     Two passes over the shapes, one shape at a time, so memory does not grow with the HOG maps:
     1. each shape's maps (kept in a temporary `MapStore` unless `maps`, a sequence of per-shape
-       maps, is given), its line character, and its inked patches offered to the two
-       dictionary draws (`DescriptorDraw`: a bounded draw by place);
+       maps, is given), its line character, and its inked patches offered to every dictionary
+       draw (`DescriptorDraw`: a bounded draw by place);
     2. the dictionaries (k-means), then each shape's word and layout profiles from its maps.
     `drawings` may be any sequence of ShapeDrawings, read in order, one at a time."""
     prog = Progress.wrap(progress)
     n = len(drawings)
-    rs = params.random_state
+    if params.n_dictionaries < 1:
+        raise InputError(f"need at least one dictionary, got n_dictionaries={params.n_dictionaries}")
+    states = [dictionary_state(params.random_state, m) for m in range(params.n_dictionaries)]
     timings = {"patches": 0.0, "hog": 0.0}
     store = MapStore() if maps is None else None
     source = store if store is not None else maps       # where each shape's maps are read
     try:
-        draws = (DescriptorDraw(params.patch_size, salt=1 + rs),
-                 DescriptorDraw(params.structure_patch_size, salt=2 + rs))
+        draws = [(DescriptorDraw(params.patch_size, salt=1 + rs),
+                  DescriptorDraw(params.structure_patch_size, salt=2 + rs)) for rs in states]
         lines, n_patches = [], 0
         for i, d in enumerate(drawings):
             prog.step("hog" if store is not None else "patches", i, n)
@@ -335,41 +386,48 @@ def encode(drawings, params: AnalysisParams, maps=None, progress=None) -> Encodi
             t = time.perf_counter()
             p = extract_patches([d], size=params.patch_size)
             n_patches += len(p)
-            for draw in draws:
-                draw.add(m, i, d.name, p.view, p.seed, p.centre)
+            for pair in draws:
+                for draw in pair:
+                    draw.add(m, i, d.name, p.view, p.seed, p.centre)
             lines.append(line_character(m))
             timings["patches"] += time.perf_counter() - t
         if n_patches == 0:
             raise InputError("no patch with ink in any drawing: the shapes drew no lines")
 
         t = time.perf_counter()
-        prog.step("representatives", 0, 1)
-        bank = draws[0].bank(params.n_words, rs)
-        layout_bank = draws[1].bank(params.n_representatives, rs + 1)
+        banks = []
+        for j, ((word_draw, layout_draw), rs) in enumerate(zip(draws, states)):
+            prog.step("representatives", j, len(states))
+            banks.append((word_draw.bank(params.n_words, rs),
+                          layout_draw.bank(params.n_representatives, rs + 1)))
         timings["representatives"] = time.perf_counter() - t
-        if len(bank) == 0:
+        if len(banks[0][0]) == 0:
             raise InputError("no patch with ink in any drawing: the shapes drew no lines")
 
         t = time.perf_counter()
-        counts = np.zeros((n, len(bank)))
-        layout_counts = np.zeros((n, len(layout_bank)))
+        counts = [(np.zeros((n, len(b))), np.zeros((n, len(lb)))) for b, lb in banks]
         for i in range(n):
             prog.step("encode", i, n)
             m = source[i][None]
-            counts[i] = word_counts(m, bank.hog).sum(axis=1)[0]
-            layout_counts[i] = word_counts(m, layout_bank.hog).sum(axis=1)[0]
+            for (b, lb), (c, lc) in zip(banks, counts):
+                c[i] = word_counts(m, b.hog).sum(axis=1)[0]
+                lc[i] = word_counts(m, lb.hog).sum(axis=1)[0]
     finally:
         if store is not None:
             store.close()
-    words = frequency_features(counts[:, None])
-    layout = frequency_features(layout_counts[:, None])
     # what reselection scores a word by: how much more of it a shape has than its look-alikes,
     # averaged over the ladder's scales
     ks = neighbour_ladder(n)
-    neighbours = look_alikes(layout, max([k for k in ks if k < n - 1], default=0))
-    relative = np.mean(structure_relative(words, neighbours, ks), axis=0)
+    k_far = max([k for k in ks if k < n - 1], default=0)
+    dictionaries = []
+    for (bank, _), (c, lc) in zip(banks, counts):
+        words = frequency_features(c[:, None])
+        layout = frequency_features(lc[:, None])
+        neighbours = look_alikes(layout, k_far)
+        relative = np.mean(structure_relative(words, neighbours, ks), axis=0)
+        dictionaries.append(Dictionary(bank, words, layout, neighbours, relative))
     timings["encode"] = time.perf_counter() - t
-    return Encoding(bank, words, layout, np.stack(lines), neighbours, relative, timings)
+    return Encoding(dictionaries, np.stack(lines), timings)
 
 
 def analyse(drawings: list[ShapeDrawings], params: AnalysisParams,
@@ -397,22 +455,23 @@ def analyse(drawings: list[ShapeDrawings], params: AnalysisParams,
     if encoded is None:
         encoded = encode(drawings, params, maps, prog)
     timings = dict(encoded.timings)
-    bank, words, lines, relative = encoded.bank, encoded.words, encoded.lines, encoded.relative
+    dicts, lines = encoded.dictionaries, encoded.lines
     # what a linear discriminant weighs when labels are given (_label_transduction)
     features = None
     if y is not None:
-        features = np.hstack([relative, lines])
+        features = np.hstack([d.relative for d in dicts] + [lines])
         features = (features - features.mean(axis=0)) / (features.std(axis=0) + 1e-9)
 
-    keep = np.ones(len(bank), bool)
+    keeps = [np.ones(len(d.bank), bool) for d in dicts]
     prev = None
     rounds, seen = [], set()
     for r in range(max(1, params.max_rounds)):
         t = time.perf_counter()
         prog.step("fuse", r, params.max_rounds)
-        views, view_names = fusion_views(words[:, keep], encoded.neighbours, lines,
-                                         params.n_style_dims)
+        views, view_names, kinds = _views(dicts, keeps, lines, params.n_style_dims)
         a, weights = _style_graph(views, params, y, fusion)
+        if weights is not None:               # one weight per kind of view, summed over dictionaries
+            weights = np.bincount(kinds, weights, minlength=len(view_names))
         timings["fuse"] = timings.get("fuse", 0.0) + time.perf_counter() - t
 
         t = time.perf_counter()
@@ -424,22 +483,24 @@ def analyse(drawings: list[ShapeDrawings], params: AnalysisParams,
 
         t = time.perf_counter()
         prog.step("reselect", r, params.max_rounds)
-        sel = reselect(relative, clusters, np.zeros(len(bank), np.int64), mu=params.mu,
-                       min_per_view=params.min_filters)
+        sels = [reselect(d.relative, clusters, np.zeros(len(d.bank), np.int64), mu=params.mu,
+                         min_per_view=params.min_filters) for d in dicts]
         timings["reselect"] = timings.get("reselect", 0.0) + time.perf_counter() - t
         changed = n_changed(prev, clusters)
-        same_words = bool(np.array_equal(sel.keep, keep))
-        rounds.append({"round": r, "n_filters": int(keep.sum()), "n_clusters": n_c,
-                       "n_changed": changed, "n_selected": int(sel.keep.sum()),
-                       "n_passed": sel.n_passed, "view_weights": [float(w) for w in weights]
+        same_words = all(np.array_equal(s.keep, k) for s, k in zip(sels, keeps))
+        rounds.append({"round": r, "n_filters": int(keeps[0].sum()), "n_clusters": n_c,
+                       "n_changed": changed, "n_selected": int(sels[0].keep.sum()),
+                       "n_passed": sels[0].n_passed, "view_weights": [float(w) for w in weights]
                        if weights is not None else None,
                        "clusters": [int(c) for c in clusters]})
-        state = (_partition_key(clusters), sel.keep.tobytes())
+        state = (_partition_key(clusters), b"".join(s.keep.tobytes() for s in sels))
         if (prev is not None and changed == 0 and same_words) or state in seen:
             break
         seen.add(state)
-        prev, keep = clusters, sel.keep
+        prev, keeps = clusters, [s.keep for s in sels]
 
+    # the result's words: the first dictionary's (drawn with the analysis seed)
+    bank, sel = dicts[0].bank, sels[0]
     fused = _coordinates(a, params)
     final = np.flatnonzero(sel.keep)
     best = sel.scores.argmax(axis=0) if sel.scores.size else np.zeros(len(bank), np.int64)

@@ -110,14 +110,10 @@ def style_space(x: np.ndarray, n_dims: int) -> np.ndarray:
     return p / np.maximum(np.linalg.norm(p, axis=1, keepdims=True), 1e-12)
 
 
-def fusion_views(words: np.ndarray, neighbours: np.ndarray, lines: np.ndarray,
-                 n_dims: int) -> tuple[list, list]:
-    """The default method's views and their names: one structure-relative word view per rung of
-    the neighbour ladder (`neighbours` from `look_alikes`), then the line-character view; each
-    in its `n_dims` principal directions (style_space)."""
+def word_views(words: np.ndarray, neighbours: np.ndarray, n_dims: int) -> tuple[list, list]:
+    """The word views of one dictionary and their names: one structure-relative word view per
+    rung of the neighbour ladder (`neighbours` from `look_alikes`), each in its `n_dims`
+    principal directions (style_space). The pipeline adds the line-character view."""
     ks = neighbour_ladder(len(words))
     views = [style_space(r, n_dims) for r in structure_relative(words, neighbours, ks)]
-    names = [f"words vs {k} look-alikes" for k in ks]
-    views.append(style_space(lines, n_dims))
-    names.append("line character")
-    return views, names
+    return views, [f"words vs {k} look-alikes" for k in ks]
