@@ -220,3 +220,28 @@ def test_encoding_reads_the_shapes_one_at_a_time(collection):
     for a, b in zip(lazy.dictionaries, held.dictionaries):
         for field in ("words", "layout", "relative", "neighbours"):
             np.testing.assert_array_equal(getattr(a, field), getattr(b, field))
+
+
+def test_dictionaries_are_independent_draws_and_the_first_is_the_seeds(collection):
+    """Each dictionary is its own draw; the first is the one a single-dictionary analysis draws,
+    and it is the one the result reports (its words mark the meshes). The views of all of them
+    fuse into one graph whose view weights are reported once per kind of view."""
+    from dataclasses import replace
+
+    from style_coanalysis.features import collection_maps
+    from style_coanalysis.pipeline import encode
+    drawings, _, _ = collection
+    maps = collection_maps(drawings)
+    one = encode(drawings, replace(PARAMS, n_dictionaries=1), maps=maps)
+    three = encode(drawings, replace(PARAMS, n_dictionaries=3), maps=maps)
+    assert len(one.dictionaries) == 1 and len(three.dictionaries) == 3
+    np.testing.assert_array_equal(one.dictionaries[0].bank.hog, three.dictionaries[0].bank.hog)
+    np.testing.assert_array_equal(one.dictionaries[0].words, three.dictionaries[0].words)
+    hogs = [d.bank.hog for d in three.dictionaries]
+    assert not np.array_equal(hogs[0], hogs[1]) and not np.array_equal(hogs[1], hogs[2])
+
+    result = analyse(drawings, replace(PARAMS, n_dictionaries=3), maps=maps, encoded=three)
+    np.testing.assert_array_equal(result.words, three.dictionaries[0].bank.hog)
+    assert len(result.view_names) == len(result.view_weights) == len(set(result.view_names))
+    assert result.view_names[-1] == "line character"
+    assert result.view_weights.sum() == pytest.approx(1.0)
