@@ -1,10 +1,10 @@
 """The style graph: one similarity graph per view, fused, then cut into style clusters.
 
-Why graphs rather than one feature matrix: the views (views.fusion_views) disagree where they
-see structure rather than style (the view compared with few look-alikes sees noise, the one
-compared with the whole collection sees category), and agree on style. A weighted mean of the
-views' graphs keeps an edge strong only where several views make it, so what they agree on
-dominates the cut; the spectral cut then needs no assumption on cluster shape. Measured against
+Why graphs rather than one feature matrix: the views (views.word_views, line character) disagree
+where they see structure rather than style (the view compared with few look-alikes sees noise,
+the one compared with the whole collection sees category), and agree on style. A weighted mean
+of the views' graphs keeps an edge strong only where several views make it, so what they agree
+on dominates the cut; the spectral cut then needs no assumption on cluster shape. Measured against
 PSLF, concatenation and single views on every benchmark collection (README table).
 
 Each view's graph links every shape to its `N_EDGES` nearest shapes (and theirs to it), with the
