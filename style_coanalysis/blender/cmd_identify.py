@@ -40,8 +40,9 @@ def identify_job(meshes, options, drawings: ident.DrawingSet, progress=None) -> 
     from dataclasses import replace
 
     from .job import run_steps
-    # the vote reads only the word dictionary, made before the clustering rounds: one round
-    options.params = replace(options.params, max_rounds=1)
+    # the vote reads only the (first) word dictionary, made before the clustering rounds: one
+    # round, one dictionary
+    options.params = replace(options.params, max_rounds=1, n_dictionaries=1)
     steps = run_steps(meshes, options)
     while True:
         try:
