@@ -211,6 +211,27 @@ class DescriptorDraw:
                           centre[pick])
 
 
+def _windows(maps: np.ndarray, nb: int, ink: float):
+    """One shape's windows of nb x nb blocks as rows (W, nb*nb*C), their norms, which are inked
+    (see `word_assignments`), and the (V, oy, ox) shape they come from; None when the maps are
+    smaller than a window."""
+    maps = np.asarray(maps, np.float32)
+    v, by, bx, c = maps.shape
+    oy, ox = by - nb + 1, bx - nb + 1
+    if oy <= 0 or ox <= 0:
+        return None
+    cols = sliding_window_view(maps, (nb, nb), axis=(1, 2)).reshape(-1, c * nb * nb)
+    norm = np.sqrt(np.einsum("ij,ij->i", cols, cols))
+    nz = norm[norm > EPS]
+    inked = norm > ink * np.median(nz) if len(nz) else np.zeros(len(norm), bool)
+    return cols, norm, inked, (v, oy, ox)
+
+
+def _filter_matrix(filters: np.ndarray) -> np.ndarray:
+    """(nb*nb*C, K) unit filters laid out as the window rows of `_windows`."""
+    return unit_rows(np.asarray(filters, np.float32).transpose(0, 3, 1, 2)).T
+
+
 def word_assignments(maps: np.ndarray, filters: np.ndarray, ink: float = 0.5):
     """One shape's windows against the dictionary: best word, its cosine, and which are inked.
 
@@ -220,23 +241,37 @@ def word_assignments(maps: np.ndarray, filters: np.ndarray, ink: float = 0.5):
     gradient would otherwise be assigned too). Used for the encoding (word counts) and for
     finding where on a drawing the style words are (localisation).
     """
-    maps = np.asarray(maps, np.float32)
-    v, by, bx, c = maps.shape
+    v, by, bx, _ = np.shape(maps)
     k, nb = len(filters), filters.shape[1]
-    oy, ox = by - nb + 1, bx - nb + 1
-    if k == 0 or oy <= 0 or ox <= 0:
-        z = np.zeros((v, max(oy, 0), max(ox, 0)))
+    win = _windows(maps, nb, ink) if k else None
+    if win is None:
+        z = np.zeros((v, max(by - nb + 1, 0), max(bx - nb + 1, 0)))
         return z.astype(np.int64), z, z.astype(bool)
-    fmat = unit_rows(np.asarray(filters, np.float32).transpose(0, 3, 1, 2)).T
-    cols = sliding_window_view(maps, (nb, nb), axis=(1, 2)).reshape(-1, c * nb * nb)
-    norm = np.sqrt(np.einsum("ij,ij->i", cols, cols))
-    scores = cols @ fmat
+    cols, norm, inked, shape = win
+    scores = cols @ _filter_matrix(filters)
     best = scores.argmax(axis=1)
     sim = scores[np.arange(len(best)), best] / np.maximum(norm, EPS)
-    nz = norm[norm > EPS]
-    inked = norm > ink * np.median(nz) if len(nz) else np.zeros(len(norm), bool)
-    shape = (v, oy, ox)
     return best.reshape(shape), sim.reshape(shape), inked.reshape(shape)
+
+
+def shape_word_counts(maps: np.ndarray, banks: list, ink: float = 0.5) -> list:
+    """One shape's (V, K) word counts against each of several dictionaries of one patch size
+    (`word_counts`), its windows cut once for all of them."""
+    maps = np.asarray(maps, np.float32)
+    v = maps.shape[0]
+    win = _windows(maps, banks[0].shape[1], ink) if banks else None
+    out = []
+    for filters in banks:
+        k = len(filters)
+        counts = np.zeros((v, k), np.float32)
+        if win is not None and k:
+            cols, _, inked, shape = win
+            best = (cols @ _filter_matrix(filters)).argmax(axis=1).reshape(shape)
+            inked = inked.reshape(shape)
+            for vv in range(v):
+                counts[vv] = np.bincount(best[vv][inked[vv]], minlength=k)
+        out.append(counts)
+    return out
 
 
 def word_counts(view_maps: np.ndarray, filters: np.ndarray, ink: float = 0.5) -> np.ndarray:
@@ -245,14 +280,8 @@ def word_counts(view_maps: np.ndarray, filters: np.ndarray, ink: float = 0.5) ->
     view_maps: (N, V, by, bx, C); filters: (K, nb, nb, C); see `word_assignments`.
     """
     view_maps = np.asarray(view_maps, np.float32)
-    n, v = view_maps.shape[:2]
-    k = len(filters)
-    out = np.zeros((n, v, k), np.float32)
-    for i in range(n):
-        best, _, inked = word_assignments(view_maps[i], filters, ink)
-        for vv in range(v):
-            out[i, vv] = np.bincount(best[vv][inked[vv]], minlength=k)
-    return out
+    return np.stack([shape_word_counts(m, [filters], ink)[0] for m in view_maps]) if \
+        len(view_maps) else np.zeros((0, view_maps.shape[1], len(filters)), np.float32)
 
 
 def frequency_features(counts: np.ndarray) -> np.ndarray:

@@ -44,7 +44,7 @@ from scipy.optimize import linear_sum_assignment
 from . import graph
 from .constraints import labels_to_array, triplets_to_array, validate_labels, validate_triplets
 from .drawings import ShapeDrawings
-from .encoding import DescriptorDraw, FilterBank, frequency_features, word_counts
+from .encoding import DescriptorDraw, FilterBank, frequency_features, shape_word_counts
 from .features import MapStore, hog_images, line_character
 from .hashing import uniform
 from .meshes import InputError
@@ -408,10 +408,11 @@ def encode(drawings, params: AnalysisParams, maps=None, progress=None) -> Encodi
         counts = [(np.zeros((n, len(b))), np.zeros((n, len(lb)))) for b, lb in banks]
         for i in range(n):
             prog.step("encode", i, n)
-            m = source[i][None]
-            for (b, lb), (c, lc) in zip(banks, counts):
-                c[i] = word_counts(m, b.hog).sum(axis=1)[0]
-                lc[i] = word_counts(m, lb.hog).sum(axis=1)[0]
+            m = source[i]
+            words_i = shape_word_counts(m, [b.hog for b, _ in banks])
+            layout_i = shape_word_counts(m, [lb.hog for _, lb in banks])
+            for (c, lc), w, lw in zip(counts, words_i, layout_i):
+                c[i], lc[i] = w.sum(axis=0), lw.sum(axis=0)
     finally:
         if store is not None:
             store.close()
