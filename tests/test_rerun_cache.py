@@ -1,13 +1,13 @@
 """Issue 15: a second run on unchanged shapes reads what the first computed (HOG maps, the
-analysis) instead of redoing it, gives the identical result, and never trusts a damaged or
+analysis, the style regions) instead of redoing it, gives the identical result, and never trusts a damaged or
 foreign entry; a changed drawing, parameter or label computes again."""
 import numpy as np
 import pytest
 
 from conftest import DAMAGES, damage_entry
-from style_coanalysis import features, pipeline
-from style_coanalysis.cache import (AnalysisCache, HogCache, analysis_key, hog_key, images_digest,
-                                    result_from_arrays, result_to_arrays)
+from style_coanalysis import features, localisation, pipeline
+from style_coanalysis.cache import (AnalysisCache, HogCache, RegionCache, analysis_key, hog_key,
+                                    images_digest, result_from_arrays, result_to_arrays)
 
 
 def images(seed=0, n=3, size=48):
@@ -115,9 +115,11 @@ def same_result(a, b):
 
 @pytest.fixture
 def counted(monkeypatch):
-    """Counts the job's HOG computations and analyses (the job looks both up when it runs)."""
-    calls = {"hog": 0, "analyse": 0}
+    """Counts the job's HOG computations, analyses and style regions (the job looks them up when
+    it runs)."""
+    calls = {"hog": 0, "analyse": 0, "localise": 0}
     real_hog, real_analyse = features.hog_images, pipeline.analyse
+    real_localise = localisation.localise_shape
 
     def hog_images(imgs):
         calls["hog"] += 1
@@ -126,13 +128,17 @@ def counted(monkeypatch):
     def analyse(*a, **k):
         calls["analyse"] += 1
         return real_analyse(*a, **k)
+    def localise_shape(*a, **k):
+        calls["localise"] += 1
+        return real_localise(*a, **k)
     monkeypatch.setattr(features, "hog_images", hog_images)
     monkeypatch.setattr(pipeline, "analyse", analyse)
+    monkeypatch.setattr(localisation, "localise_shape", localise_shape)
     return calls
 
 
 @pytest.mark.blender
-def test_second_job_reads_maps_and_analysis_and_gives_the_same_result(tmp_path, counted):
+def test_second_job_reads_maps_analysis_and_regions_and_gives_the_same_result(tmp_path, counted):
     pytest.importorskip("bpy")
     from style_coanalysis import sample
     from style_coanalysis.options import build_options
@@ -142,39 +148,52 @@ def test_second_job_reads_maps_and_analysis_and_gives_the_same_result(tmp_path, 
                                 "clusters": 2, "rounds": 1} | kw)
     meshes = sample.generate(size=4, seed=0)
     first = run(meshes, opts())
-    assert counted == {"hog": 4, "analyse": 1}          # one HOG computation per shape
+    assert counted == {"hog": 4, "analyse": 1, "localise": 4}     # once per shape
     assert len(list((tmp_path / "hog").rglob("*.npz"))) == 4
     assert len(list((tmp_path / "analysis").rglob("*.npz"))) == 1
+    assert len(list((tmp_path / "regions").rglob("*.npz"))) == 4
     second = run(meshes, opts())
-    assert counted == {"hog": 4, "analyse": 1}          # nothing computed again
+    assert counted == {"hog": 4, "analyse": 1, "localise": 4}     # nothing computed again
     assert outcome(second) == outcome(first)
     same_result(second.analysis, first.analysis)
+    for a, b in zip(second.localisations, first.localisations):
+        assert a.best_view == b.best_view and a.matches == b.matches
+        for f in ("weights", "face_weights", "view_scores"):
+            x, y = getattr(a, f), getattr(b, f)
+            assert np.array_equal(x, y) and x.dtype == y.dtype, f
 
-    # a changed analysis parameter, label or order re-runs the analysis on the cached maps
+    # a changed analysis parameter, label or order re-runs the analysis on the cached maps, and
+    # the regions of its result
     run(meshes, opts(rounds=2))
-    assert counted == {"hog": 4, "analyse": 2}
+    assert counted == {"hog": 4, "analyse": 2, "localise": 8}
     run(meshes, opts(labels={meshes[0].name: "a", meshes[1].name: "b"}))
     run(meshes, opts(labels={meshes[0].name: "a", meshes[1].name: "c"}))
     run(meshes[::-1], opts())
-    assert counted == {"hog": 4, "analyse": 5}
+    assert counted == {"hog": 4, "analyse": 5, "localise": 20}
     run(meshes, opts(rounds=2))                         # and that one was cached too
-    assert counted == {"hog": 4, "analyse": 5}
+    assert counted == {"hog": 4, "analyse": 5, "localise": 20}
 
-    # a damaged analysis entry is not trusted: removed, computed again, same result
+    # damaged analysis and region entries are not trusted: removed, computed again, same result
     for path in (tmp_path / "analysis").rglob("*.npz"):
         path.write_bytes(path.read_bytes()[:100])
     third = run(meshes, opts())
-    assert counted == {"hog": 4, "analyse": 6}
+    assert counted == {"hog": 4, "analyse": 6, "localise": 20}   # the same analysis: its regions
     assert outcome(third) == outcome(first)
+    for path in (tmp_path / "regions").rglob("*.npz"):
+        path.write_bytes(path.read_bytes()[:100])
+    fourth = run(meshes, opts())
+    assert counted == {"hog": 4, "analyse": 6, "localise": 24}   # this run's regions redone
+    assert outcome(fourth) == outcome(first)
 
-    # a drawing setting that changes the drawings (the up axis) misses both
+    # a drawing setting that changes the drawings (the up axis) misses all three
     run(meshes, opts(up="y"))
-    assert counted == {"hog": 8, "analyse": 7}
+    assert counted == {"hog": 8, "analyse": 7, "localise": 28}
 
     # no cache asked for: nothing read, nothing written
     before = sorted(tmp_path.rglob("*.npz"))
     run(meshes, opts(cache_dir=False))
-    assert counted == {"hog": 12, "analyse": 8} and sorted(tmp_path.rglob("*.npz")) == before
+    assert counted == {"hog": 12, "analyse": 8, "localise": 32}
+    assert sorted(tmp_path.rglob("*.npz")) == before
 
 
 def analysed(labels=None):
@@ -218,3 +237,24 @@ def test_analysis_key_sees_every_input():
               analysis_key(["a", "b"], params, None, [("a", "b", "c")]),
               analysis_key(["a", "b"], params, {"x": "1"}, None, version="analysis-other")]
     assert len({base, *others}) == 1 + len(others)
+
+
+def test_region_entry_round_trips_exactly_and_a_damaged_one_is_dropped(tmp_path):
+    from style_coanalysis.localisation import ShapeLocalisation
+    rng = np.random.default_rng(0)
+    loc = ShapeLocalisation(rng.random(7).astype(np.float32), rng.random(9).astype(np.float32),
+                            3, [(0, 12.5, 40.0, 0.71), (3, 100.0, 8.25, 0.6)],
+                            np.array([0, 2, 0, 5]))
+    cache = RegionCache(tmp_path)
+    cache.store("ab" * 32, loc)
+    back = cache.load("ab" * 32)
+    assert back.best_view == 3 and back.matches == loc.matches
+    for f in ("weights", "face_weights", "view_scores"):
+        assert np.array_equal(getattr(back, f), getattr(loc, f))
+        assert getattr(back, f).dtype == getattr(loc, f).dtype
+    empty = ShapeLocalisation(loc.weights, loc.face_weights, 0, [], loc.view_scores)
+    cache.store("cd" * 32, empty)
+    assert cache.load("cd" * 32).matches == []
+    path = cache.path("ab" * 32)
+    path.write_bytes(path.read_bytes()[:50])
+    assert cache.load("ab" * 32) is None and not path.exists()

@@ -201,13 +201,24 @@ def _run_steps(meshes: list[Mesh], options: JobOptions):
     locs, shapes = [], []
     marked_words = localisation.top_words(result.word_cluster, result.word_score,
                                           options.localisation.words_per_cluster)
+    # each shape's regions are cached under the analysis they come from (same key, same result)
+    from dataclasses import asdict
+
+    from ..cache import RegionCache, cache_key, region_key
+    regions = RegionCache(options.cache_dir) if key is not None else None
+    where = {**asdict(options.localisation), "patch_size": options.params.patch_size}
     for i, (m, d) in enumerate(zip(good, drawings)):
         yield ("localise", i, len(good))
-        normal = normalise(m, options.up)
-        loc = localisation.localise_shape(d, normal.vertices, normal.faces, result.words,
-                                          marked_words, int(result.clusters[i]),
-                                          options.params.patch_size,
-                                          options.localisation.match_threshold, maps=maps[i])
+        rkey = region_key(key, cache_key(m, settings), i, where) if regions is not None else None
+        loc = regions.load(rkey) if rkey is not None else None
+        if loc is None:
+            normal = normalise(m, options.up)
+            loc = localisation.localise_shape(d, normal.vertices, normal.faces, result.words,
+                                              marked_words, int(result.clusters[i]),
+                                              options.params.patch_size,
+                                              options.localisation.match_threshold, maps=maps[i])
+            if rkey is not None:
+                regions.store(rkey, loc)
         locs.append(loc)
         centre, radius = normalisation(m, options.up)
         given = bool(result.label_given[i])
