@@ -491,6 +491,7 @@ def analyse(drawings: list[ShapeDrawings], params: AnalysisParams,
         timings["reselect"] = timings.get("reselect", 0.0) + time.perf_counter() - t
         changed = n_changed(prev, clusters)
         same_words = all(np.array_equal(s.keep, k) for s, k in zip(sels, keeps))
+        # the word counts reported are the first dictionary's, whose words the result shows
         rounds.append({"round": r, "n_filters": int(keeps[0].sum()), "n_clusters": n_c,
                        "n_changed": changed, "n_selected": int(sels[0].keep.sum()),
                        "n_passed": sels[0].n_passed, "view_weights": [float(w) for w in weights]

@@ -18,7 +18,7 @@ from __future__ import annotations
 
 import threading
 import time
-from dataclasses import dataclass, field, replace
+from dataclasses import asdict, dataclass, field, replace
 
 import numpy as np
 
@@ -155,7 +155,8 @@ def _run_steps(meshes: list[Mesh], options: JobOptions):
     # once here because the style regions (stage 3) read them too, and cached beside the
     # drawings so a second run reads them (one shape at a time, as it computes them)
     from .. import pipeline
-    from ..cache import AnalysisCache, HogCache, analysis_key, drawings_digest, images_digest
+    from ..cache import (AnalysisCache, HogCache, RegionCache, analysis_key, cache_key,
+                         drawings_digest, images_digest, region_key)
     from ..features import MapStore, hog_images
     t0 = time.perf_counter()
     cached = options.cache_dir is not False
@@ -202,9 +203,6 @@ def _run_steps(meshes: list[Mesh], options: JobOptions):
     marked_words = localisation.top_words(result.word_cluster, result.word_score,
                                           options.localisation.words_per_cluster)
     # each shape's regions are cached under the analysis they come from (same key, same result)
-    from dataclasses import asdict
-
-    from ..cache import RegionCache, cache_key, region_key
     regions = RegionCache(options.cache_dir) if key is not None else None
     where = {**asdict(options.localisation), "patch_size": options.params.patch_size}
     for i, (m, d) in enumerate(zip(good, drawings)):
