@@ -121,9 +121,9 @@ def counted(monkeypatch):
     real_hog, real_analyse = features.hog_images, pipeline.analyse
     real_localise = localisation.localise_shape
 
-    def hog_images(imgs):
+    def hog_images(images):
         calls["hog"] += 1
-        return real_hog(imgs)
+        return real_hog(images)
 
     def analyse(*a, **k):
         calls["analyse"] += 1
@@ -194,6 +194,25 @@ def test_second_job_reads_maps_analysis_and_regions_and_gives_the_same_result(tm
     run(meshes, opts(cache_dir=False))
     assert counted == {"hog": 12, "analyse": 8, "localise": 32}
     assert sorted(tmp_path.rglob("*.npz")) == before
+
+
+@pytest.mark.blender
+def test_maps_and_regions_in_two_processes_are_those_of_one(tmp_path):
+    """The HOG maps and the style regions not cached are computed in `jobs` processes: the
+    result is the serial one, in input order, and every map is cached once."""
+    pytest.importorskip("bpy")
+    from style_coanalysis import sample
+    from style_coanalysis.options import build_options
+
+    meshes = sample.generate(size=5, seed=1)
+    one, two = (run(meshes, build_options(renderer="zbuffer", jobs=jobs, clusters=2, rounds=1,
+                                          cache_dir=tmp_path / f"c{jobs}")) for jobs in (1, 2))
+    assert outcome(two) == outcome(one)
+    for a, b in zip(two.localisations, one.localisations):
+        assert a.best_view == b.best_view and a.matches == b.matches
+        assert np.array_equal(a.face_weights, b.face_weights)
+    assert len(list((tmp_path / "c2" / "hog").rglob("*.npz"))) == 5
+    assert len(list((tmp_path / "c2" / "regions").rglob("*.npz"))) == 5
 
 
 def analysed(labels=None):

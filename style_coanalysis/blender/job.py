@@ -153,23 +153,37 @@ def _run_steps(meshes: list[Mesh], options: JobOptions):
 
     # 2. the analysis, on the first n_seeds seeds of each shape; the HOG maps are computed
     # once here because the style regions (stage 3) read them too, and cached beside the
-    # drawings so a second run reads them (one shape at a time, as it computes them)
+    # drawings so a second run reads them. The maps not cached are computed in `jobs`
+    # processes (pure per-shape work), and the store takes them in order as they come.
     from .. import pipeline
     from ..cache import (AnalysisCache, HogCache, RegionCache, analysis_key, cache_key,
-                         drawings_digest, images_digest, region_key)
+                         drawings_digest, hog_key, images_digest, region_key)
     from ..features import MapStore, hog_images
     t0 = time.perf_counter()
     cached = options.cache_dir is not False
     hogs = HogCache(options.cache_dir) if cached else None
     maps = MapStore()       # on disk: a collection's maps need not fit in memory
-    sums = []               # each shape's images digest: the HOG key, part of the analysis key
-    for i, d in enumerate(drawings):
-        yield ("hog", i, len(drawings))
-        if hogs is None:
-            maps.append(hog_images(d.images))
-            continue
-        sums.append(images_digest(d.images))
-        maps.append(hogs.get_or_compute(d.images, lambda: hog_images(d.images), sums[i])[0])
+    # each shape's images digest: the HOG key, part of the analysis key
+    sums = [images_digest(d.images) for d in drawings] if cached else []
+    found = {}
+    if hogs is not None:
+        for i in range(len(drawings)):
+            hit = hogs.load(hog_key(sums[i]))
+            if hit is not None:
+                found[i] = hit
+    missing = [i for i in range(len(drawings)) if i not in found]
+    computed = batch.in_processes(hog_images, ({"images": drawings[i].images} for i in missing),
+                                  len(missing), options.jobs)
+    try:
+        for i in range(len(drawings)):
+            yield ("hog", i, len(drawings))
+            if i not in found:
+                found[i] = next(computed)
+                if hogs is not None:
+                    hogs.store(hog_key(sums[i]), found[i])
+            maps.append(found.pop(i))
+    finally:
+        computed.close()    # a cancel ends the workers now
     timings["hog"] = time.perf_counter() - t0
     t0 = time.perf_counter()
     analysis_drawings = [seed_subset(d, options.n_seeds) for d in drawings]
@@ -205,27 +219,44 @@ def _run_steps(meshes: list[Mesh], options: JobOptions):
     # each shape's regions are cached under the analysis they come from (same key, same result)
     regions = RegionCache(options.cache_dir) if key is not None else None
     where = {**asdict(options.localisation), "patch_size": options.params.patch_size}
-    for i, (m, d) in enumerate(zip(good, drawings)):
-        yield ("localise", i, len(good))
-        rkey = region_key(key, cache_key(m, settings), i, where) if regions is not None else None
-        loc = regions.load(rkey) if rkey is not None else None
-        if loc is None:
-            normal = normalise(m, options.up)
-            loc = localisation.localise_shape(d, normal.vertices, normal.faces, result.words,
-                                              marked_words, int(result.clusters[i]),
-                                              options.params.patch_size,
-                                              options.localisation.match_threshold, maps=maps[i])
-            if rkey is not None:
-                regions.store(rkey, loc)
-        locs.append(loc)
-        centre, radius = normalisation(m, options.up)
-        given = bool(result.label_given[i])
-        label = result.predicted[i] if result.predicted is not None else None
-        shapes.append(ShapeOutcome(
-            name=m.name, cluster=int(result.clusters[i]), label=label, label_given=given,
-            confidence=float(result.confidence[i]), best_view=loc.best_view,
-            best_view_matrix=camera_matrix(rig, loc.best_view, centre, radius, options.up),
-            vertex_weights=loc.weights, style_vertex_fraction=float((loc.weights > 0.5).mean())))
+    rkeys = [region_key(key, cache_key(m, settings), i, where) if regions is not None else None
+             for i, m in enumerate(good)]
+    found = {}
+    for i, rkey in enumerate(rkeys):
+        hit = regions.load(rkey) if rkey is not None else None
+        if hit is not None:
+            found[i] = hit
+    missing = [i for i in range(len(good)) if i not in found]
+
+    def task(i: int) -> dict:
+        normal = normalise(good[i], options.up)
+        return {"drawings": drawings[i], "vertices": normal.vertices, "faces": normal.faces,
+                "cluster": int(result.clusters[i]), "maps": maps[i]}
+    computed = batch.in_processes(
+        localisation.localise_shape, (task(i) for i in missing), len(missing), options.jobs,
+        shared={"words": result.words, "word_cluster": marked_words,
+                "patch_size": options.params.patch_size,
+                "threshold": options.localisation.match_threshold})
+    try:
+        for i, m in enumerate(good):
+            yield ("localise", i, len(good))
+            loc = found.pop(i, None)
+            if loc is None:
+                loc = next(computed)
+                if rkeys[i] is not None:
+                    regions.store(rkeys[i], loc)
+            locs.append(loc)
+            centre, radius = normalisation(m, options.up)
+            given = bool(result.label_given[i])
+            label = result.predicted[i] if result.predicted is not None else None
+            shapes.append(ShapeOutcome(
+                name=m.name, cluster=int(result.clusters[i]), label=label, label_given=given,
+                confidence=float(result.confidence[i]), best_view=loc.best_view,
+                best_view_matrix=camera_matrix(rig, loc.best_view, centre, radius, options.up),
+                vertex_weights=loc.weights,
+                style_vertex_fraction=float((loc.weights > 0.5).mean())))
+    finally:
+        computed.close()
     maps.close()
     timings["localise"] = time.perf_counter() - t0
     timings["total"] = time.perf_counter() - t_start
