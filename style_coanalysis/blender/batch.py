@@ -21,24 +21,21 @@ jobs != 1 need the usual `if __name__ == "__main__":` guard.
 """
 from __future__ import annotations
 
-import collections
 import contextlib
 import contextvars
 import multiprocessing
 import os
 import queue as queue_module
-import signal
-import sys
 from concurrent.futures import FIRST_COMPLETED, ProcessPoolExecutor, wait
 from concurrent.futures.process import BrokenProcessPool
-from pathlib import Path
-from typing import Callable, Iterable, Sequence
+from typing import Callable, Sequence
 
 import numpy as np
 
 from ..cache import CODE_VERSION, DrawingCache, cache_key
 from ..drawings import ShapeDrawings
 from ..meshes import InputError, Mesh, normalise
+from ..parallel import end_pool, plain_worker_init
 from ..params import DrawingSettings
 from ..progress import Cancelled
 
@@ -92,29 +89,13 @@ def effective_jobs(jobs: int, n_tasks: int) -> int:
 # ---------------------------------------------------------------- worker side
 _worker_ready = False
 _worker_queue = None
-_worker_shared: dict = {}
-
-
-def _plain_worker_init(shared: dict | None = None) -> None:
-    """Runs once in each spawned worker, with or without Blender.
-
-    'spawn' hands the worker the parent's sys.path, which already holds the folders bpy adds
-    when imported (its bundled `scripts/modules` has a `bpy` package of its own that shadows the
-    real module and fails with "No module named '_bpy'"): drop those. Ctrl-C in a terminal
-    reaches the whole process group: workers ignore it and the parent, which does get it, ends
-    them. `shared`: the keyword arguments every task of `in_processes` has, sent once.
-    """
-    global _worker_shared
-    signal.signal(signal.SIGINT, signal.SIG_IGN)
-    sys.path[:] = [p for p in sys.path if "bpy" not in Path(p).parts]
-    _worker_shared = dict(shared or {})
 
 
 def _worker_init(progress_queue=None) -> None:
-    """Runs once in each spawned drawing worker: `_plain_worker_init`, then a clean factory
+    """Runs once in each spawned drawing worker: `parallel.plain_worker_init`, then a clean factory
     Blender."""
     global _worker_ready, _worker_queue
-    _plain_worker_init()
+    plain_worker_init()
     _worker_queue = progress_queue
     import bpy
     from .render import quiet_fds
@@ -141,46 +122,7 @@ def _worker_draw(name: str, vertices: np.ndarray, faces: np.ndarray, settings: D
                 pass
 
 
-def _call_shared(fn, item: dict):
-    """One task of `in_processes` in a worker: fn(**shared, **item)."""
-    return fn(**_worker_shared, **item)
-
-
 # ---------------------------------------------------------------- parent side
-def in_processes(fn, items: Iterable[dict], n_items: int, jobs: int, shared: dict | None = None):
-    """Generator: `fn(**shared, **item)` for every item (keyword arguments), in their order.
-
-    Pure per-shape work after the drawings (HOG maps, style regions) in up to `jobs` spawned
-    processes that never import bpy, or here when one job is asked for, there is one item, or
-    this is Blender's own Python (`effective_jobs`). `fn` is a module-level function; `shared`
-    (the dictionary's words, say) is sent to each worker once; `items` is read lazily, at most
-    two per worker in flight, so a large collection is never pickled at once. Closing the
-    generator (a cancel) ends the workers at once. The results are those of the serial loop:
-    the work is a pure function of its arguments.
-    """
-    items = iter(items)
-    n_workers = effective_jobs(jobs, n_items)
-    if n_workers <= 1:
-        for item in items:
-            yield fn(**(shared or {}), **item)
-        return
-    pool = ProcessPoolExecutor(max_workers=n_workers,
-                               mp_context=multiprocessing.get_context("spawn"),
-                               initializer=_plain_worker_init, initargs=(shared,))
-    ok = False
-    try:
-        pending: collections.deque = collections.deque()
-        for item in items:
-            pending.append(pool.submit(_call_shared, fn, item))
-            if len(pending) >= 2 * n_workers:
-                yield pending.popleft().result()
-        while pending:
-            yield pending.popleft().result()
-        ok = True
-    finally:
-        _end_pool(pool, now=not ok)
-
-
 def _describe(exc: BaseException) -> str:
     text = str(exc).strip().splitlines()
     return f"{type(exc).__name__}: {text[0] if text else ''}" if not isinstance(exc, InputError) \
@@ -278,22 +220,6 @@ def draw_steps(meshes: Sequence[Mesh], settings: DrawingSettings, cache_dir=None
     return [results[i] for i in order], [skipped[i] for i in sorted(skipped)]
 
 
-def _end_pool(pool: ProcessPoolExecutor, now: bool) -> None:
-    """Shut a pool down; `now`: terminate its workers instead of letting them finish."""
-    procs = list((getattr(pool, "_processes", None) or {}).values())
-    if not now:
-        pool.shutdown(wait=True, cancel_futures=True)
-        return
-    for p in procs:
-        if p.is_alive():
-            p.terminate()
-    pool.shutdown(wait=False, cancel_futures=True)
-    for p in procs:
-        p.join(timeout=5)
-        if p.is_alive():
-            p.kill()
-
-
 def _render_in_workers(todo, settings, n_workers, finish, skipped, worker):
     """Generator: render `todo` in spawned worker processes, at most n_workers shapes at a time.
 
@@ -360,7 +286,7 @@ def _render_in_workers(todo, settings, n_workers, finish, skipped, worker):
                     yield ("render", done, total, detail)
                 ok = True
             finally:
-                _end_pool(pool, now=not ok)
+                end_pool(pool, now=not ok)
             yield ("render", done, total, None)
     finally:
         progress_queue.close()

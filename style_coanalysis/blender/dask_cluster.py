@@ -28,6 +28,7 @@ import numpy as np
 from distributed import Client, WorkerPlugin, get_worker
 
 from ..cache import DrawingCache, cache_key
+from ..parallel import end_pool
 from ..drawings import ShapeDrawings
 from ..meshes import InputError, Mesh
 from . import batch
@@ -154,7 +155,7 @@ class BlenderWorkers(WorkerPlugin):
     def teardown(self, worker) -> None:
         with self.lock:
             if self.pool is not None:
-                batch._end_pool(self.pool, now=True)
+                end_pool(self.pool, now=True)
                 self.pool = None
 
     def _pool(self) -> ProcessPoolExecutor:
@@ -181,7 +182,7 @@ class BlenderWorkers(WorkerPlugin):
             with self.lock:
                 if self.pool is pool:
                     self.pool = None
-            batch._end_pool(pool, now=True)
+            end_pool(pool, now=True)
             raise RuntimeError("Blender stopped while drawing it (its process crashed)") from None
         self.cache.store(key, ShapeDrawings.from_arrays(arrays))
         return arrays

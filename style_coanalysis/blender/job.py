@@ -153,12 +153,13 @@ def _run_steps(meshes: list[Mesh], options: JobOptions):
 
     # 2. the analysis, on the first n_seeds seeds of each shape; the HOG maps are computed
     # once here because the style regions (stage 3) read them too, and cached beside the
-    # drawings so a second run reads them. The maps not cached are computed in `jobs`
-    # processes (pure per-shape work), and the store takes them in order as they come.
+    # drawings so a second run reads them. What is not cached (maps, the analysis' encoding,
+    # regions) is computed in `jobs` plain processes (`parallel`), in order, the serial result.
     from .. import pipeline
     from ..cache import (AnalysisCache, HogCache, RegionCache, analysis_key, cache_key,
                          drawings_digest, hog_key, images_digest, region_key)
     from ..features import MapStore, hog_images
+    from ..parallel import in_processes
     t0 = time.perf_counter()
     cached = options.cache_dir is not False
     hogs = HogCache(options.cache_dir) if cached else None
@@ -172,8 +173,9 @@ def _run_steps(meshes: list[Mesh], options: JobOptions):
             if hit is not None:
                 found[i] = hit
     missing = [i for i in range(len(drawings)) if i not in found]
-    computed = batch.in_processes(hog_images, ({"images": drawings[i].images} for i in missing),
-                                  len(missing), options.jobs)
+    workers = batch.effective_jobs(options.jobs, len(drawings))
+    computed = in_processes(hog_images, ({"images": drawings[i].images} for i in missing),
+                            len(missing), workers)
     try:
         for i in range(len(drawings)):
             yield ("hog", i, len(drawings))
@@ -201,7 +203,7 @@ def _run_steps(meshes: list[Mesh], options: JobOptions):
         result = yield from _in_thread(
             lambda: pipeline.analyse(analysis_drawings, options.params, labels=options.labels,
                                      triplets=options.triplets, progress=progress,
-                                     cancel=stop, maps=maps),
+                                     cancel=stop, maps=maps, jobs=workers),
             box, cancel_flag)
         for k, v in (result.timings or {}).items():
             timings[f"analyse.{k}"] = v
@@ -232,8 +234,8 @@ def _run_steps(meshes: list[Mesh], options: JobOptions):
         normal = normalise(good[i], options.up)
         return {"drawings": drawings[i], "vertices": normal.vertices, "faces": normal.faces,
                 "cluster": int(result.clusters[i]), "maps": maps[i]}
-    computed = batch.in_processes(
-        localisation.localise_shape, (task(i) for i in missing), len(missing), options.jobs,
+    computed = in_processes(
+        localisation.localise_shape, (task(i) for i in missing), len(missing), workers,
         shared={"words": result.words, "word_cluster": marked_words,
                 "patch_size": options.params.patch_size,
                 "threshold": options.localisation.match_threshold})

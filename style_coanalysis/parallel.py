@@ -1,0 +1,86 @@
+"""Pure per-shape work in spawned worker processes, results in order.
+
+The drawings need Blender's workers (`blender.batch`); what follows them (HOG maps, the
+dictionaries' word counts, style regions) is numpy and scikit-learn only, and a pure function of
+its arguments, so it runs in plain processes and gives the serial result. Which number of
+processes is sensible (none inside Blender's own Python, whose `sys.executable` is not a Python
+that can be spawned) is the caller's to decide: `blender.batch.effective_jobs`.
+"""
+from __future__ import annotations
+
+import collections
+import multiprocessing
+import signal
+import sys
+from concurrent.futures import ProcessPoolExecutor
+from pathlib import Path
+from typing import Iterable
+
+_worker_shared: dict = {}
+
+
+def plain_worker_init(shared: dict | None = None) -> None:
+    """Runs once in each spawned worker, with or without Blender.
+
+    'spawn' hands the worker the parent's sys.path, which already holds the folders bpy adds
+    when imported (its bundled `scripts/modules` has a `bpy` package of its own that shadows the
+    real module and fails with "No module named '_bpy'"): drop those. Ctrl-C in a terminal
+    reaches the whole process group: workers ignore it and the parent, which does get it, ends
+    them. `shared`: the keyword arguments every task of `in_processes` has, sent once.
+    """
+    global _worker_shared
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
+    sys.path[:] = [p for p in sys.path if "bpy" not in Path(p).parts]
+    _worker_shared = dict(shared or {})
+
+
+def _call_shared(fn, item: dict):
+    """One task of `in_processes` in a worker: fn(**shared, **item)."""
+    return fn(**_worker_shared, **item)
+
+
+def in_processes(fn, items: Iterable[dict], n_items: int, jobs: int, shared: dict | None = None):
+    """Generator: `fn(**shared, **item)` for every item (keyword arguments), in their order.
+
+    In min(jobs, n_items) spawned processes, or here when that is 1. `fn` is a module-level
+    function; `shared` (a dictionary's words, say) is sent to each worker once; `items` is read
+    lazily, at most two per worker in flight, so a large collection is never pickled at once.
+    Closing the generator (a cancel) ends the workers at once.
+    """
+    items = iter(items)
+    n_workers = max(1, min(int(jobs), int(n_items)))
+    if n_workers <= 1:
+        for item in items:
+            yield fn(**(shared or {}), **item)
+        return
+    pool = ProcessPoolExecutor(max_workers=n_workers,
+                               mp_context=multiprocessing.get_context("spawn"),
+                               initializer=plain_worker_init, initargs=(shared,))
+    ok = False
+    try:
+        pending: collections.deque = collections.deque()
+        for item in items:
+            pending.append(pool.submit(_call_shared, fn, item))
+            if len(pending) >= 2 * n_workers:
+                yield pending.popleft().result()
+        while pending:
+            yield pending.popleft().result()
+        ok = True
+    finally:
+        end_pool(pool, now=not ok)
+
+
+def end_pool(pool: ProcessPoolExecutor, now: bool) -> None:
+    """Shut a pool down; `now`: terminate its workers instead of letting them finish."""
+    procs = list((getattr(pool, "_processes", None) or {}).values())
+    if not now:
+        pool.shutdown(wait=True, cancel_futures=True)
+        return
+    for p in procs:
+        if p.is_alive():
+            p.terminate()
+    pool.shutdown(wait=False, cancel_futures=True)
+    for p in procs:
+        p.join(timeout=5)
+        if p.is_alive():
+            p.kill()
