@@ -48,7 +48,6 @@ from .encoding import DescriptorDraw, FilterBank, frequency_features, shape_word
 from .features import MapStore, hog_images, line_character
 from .hashing import uniform
 from .meshes import InputError
-from .parallel import in_processes
 from .params import AnalysisParams
 from .patches import extract_patches
 from .progress import Progress
@@ -354,20 +353,7 @@ def dictionary_state(random_state: int, member: int) -> int:
     return int(uniform(int(random_state) & 0xFFFFFFFF, member) * 2 ** 31)
 
 
-def _banks(draws, random_state: int, n_words: int, n_representatives: int) -> tuple:
-    """One dictionary's (style words, layout words) from its pair of descriptor draws."""
-    word_draw, layout_draw = draws
-    return (word_draw.bank(n_words, random_state),
-            layout_draw.bank(n_representatives, random_state + 1))
-
-
-def _profiles(maps, word_filters: list, layout_filters: list) -> tuple[list, list]:
-    """One shape's word counts and layout-word counts, one row per dictionary."""
-    return ([w.sum(axis=0) for w in shape_word_counts(maps, word_filters)],
-            [w.sum(axis=0) for w in shape_word_counts(maps, layout_filters)])
-
-
-def encode(drawings, params: AnalysisParams, maps=None, progress=None, jobs: int = 1) -> Encoding:
+def encode(drawings, params: AnalysisParams, maps=None, progress=None) -> Encoding:
     """Patches -> HOG maps -> dictionaries -> word, layout and line profiles of every shape.
 
     `params.n_dictionaries` dictionaries are drawn independently (different seeds, so different
@@ -377,9 +363,7 @@ def encode(drawings, params: AnalysisParams, maps=None, progress=None, jobs: int
        maps, is given), its line character, and its inked patches offered to every dictionary
        draw (`DescriptorDraw`: a bounded draw by place);
     2. the dictionaries (k-means), then each shape's word and layout profiles from its maps.
-    `drawings` may be any sequence of ShapeDrawings, read in order, one at a time. `jobs`: the
-    dictionaries' k-means and the shapes' profiles run in that many processes (the same result;
-    the caller decides what the machine allows, `parallel`)."""
+    `drawings` may be any sequence of ShapeDrawings, read in order, one at a time."""
     prog = Progress.wrap(progress)
     n = len(drawings)
     if params.n_dictionaries < 1:
@@ -412,33 +396,23 @@ def encode(drawings, params: AnalysisParams, maps=None, progress=None, jobs: int
 
         t = time.perf_counter()
         banks = []
-        made = in_processes(_banks, ({"draws": pair, "random_state": rs}
-                                     for pair, rs in zip(draws, states)), len(states), jobs,
-                            shared={"n_words": params.n_words,
-                                    "n_representatives": params.n_representatives})
-        try:
-            for j in range(len(states)):
-                prog.step("representatives", j, len(states))
-                banks.append(next(made))
-        finally:
-            made.close()
+        for j, ((word_draw, layout_draw), rs) in enumerate(zip(draws, states)):
+            prog.step("representatives", j, len(states))
+            banks.append((word_draw.bank(params.n_words, rs),
+                          layout_draw.bank(params.n_representatives, rs + 1)))
         timings["representatives"] = time.perf_counter() - t
         if len(banks[0][0]) == 0:
             raise InputError("no patch with ink in any drawing: the shapes drew no lines")
 
         t = time.perf_counter()
         counts = [(np.zeros((n, len(b))), np.zeros((n, len(lb)))) for b, lb in banks]
-        counted = in_processes(_profiles, ({"maps": source[i]} for i in range(n)), n, jobs,
-                               shared={"word_filters": [b.hog for b, _ in banks],
-                                       "layout_filters": [lb.hog for _, lb in banks]})
-        try:
-            for i in range(n):
-                prog.step("encode", i, n)
-                words_i, layout_i = next(counted)
-                for (c, lc), w, lw in zip(counts, words_i, layout_i):
-                    c[i], lc[i] = w, lw
-        finally:
-            counted.close()
+        for i in range(n):
+            prog.step("encode", i, n)
+            m = source[i]
+            words_i = shape_word_counts(m, [b.hog for b, _ in banks])
+            layout_i = shape_word_counts(m, [lb.hog for _, lb in banks])
+            for (c, lc), w, lw in zip(counts, words_i, layout_i):
+                c[i], lc[i] = w.sum(axis=0), lw.sum(axis=0)
     finally:
         if store is not None:
             store.close()
@@ -460,15 +434,14 @@ def encode(drawings, params: AnalysisParams, maps=None, progress=None, jobs: int
 def analyse(drawings: list[ShapeDrawings], params: AnalysisParams,
             labels: dict | None = None, triplets: list | None = None, fusion: str = "graph",
             progress=None, cancel=None, maps: np.ndarray | None = None,
-            encoded: Encoding | None = None, jobs: int = 1) -> AnalysisResult:
+            encoded: Encoding | None = None) -> AnalysisResult:
     """Cluster shapes by style and find their style words (unsupervised, labels or triplets).
 
     `maps`: the drawings' HOG maps (a sequence of (V, by, bx, C)) when the caller has them (the job
     reuses them to find style regions); computed here otherwise. `encoded`: the collection's
     `encode` with the same drawings and parameters, when the caller runs several analyses of
     one collection (the benchmark's modes). `fusion` replaces the style graph's fusion for
-    comparisons (FUSIONS). `jobs`: processes for the encoding (`encode`); the result does not
-    depend on it."""
+    comparisons (FUSIONS)."""
     if params.method == "paper":
         from .paper_method import analyse_paper
         return analyse_paper(drawings, params, labels, triplets, progress, cancel, maps)
@@ -481,7 +454,7 @@ def analyse(drawings: list[ShapeDrawings], params: AnalysisParams,
     if n_clusters is not None and y is None and not 1 <= n_clusters <= n:
         raise InputError(f"asked for {n_clusters} clusters but there are only {n} shapes")
     if encoded is None:
-        encoded = encode(drawings, params, maps, prog, jobs=jobs)
+        encoded = encode(drawings, params, maps, prog)
     timings = dict(encoded.timings)
     dicts, lines = encoded.dictionaries, encoded.lines
     # what a linear discriminant weighs when labels are given (_label_transduction): the first

@@ -197,10 +197,9 @@ def test_second_job_reads_maps_analysis_and_regions_and_gives_the_same_result(tm
 
 
 @pytest.mark.blender
-def test_maps_encoding_and_regions_in_two_processes_are_those_of_one(tmp_path):
-    """The HOG maps, the dictionaries, the shapes' word counts and the style regions are
-    computed in `jobs` processes: the result is the serial one, in input order, and every map
-    is cached once."""
+def test_maps_and_regions_in_two_processes_are_those_of_one(tmp_path):
+    """The HOG maps and the style regions not cached are computed in `jobs` processes: the
+    result is the serial one, in input order, and every map is cached once."""
     pytest.importorskip("bpy")
     from style_coanalysis import sample
     from style_coanalysis.options import build_options

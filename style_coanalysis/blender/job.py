@@ -8,8 +8,9 @@ whole run has succeeded, so a cancelled or failed run changes nothing.
 
 Where rendering happens is decided before it starts (`batch.draw_steps`): in worker processes
 (jobs > 1 with Blender as a module), or else in this thread, one view per step. bpy never runs on
-another thread. Only the global analysis, pure numpy that never touches bpy, runs in a worker
-thread while the generator keeps yielding its progress.
+another thread. The HOG maps and style regions, pure per-shape work, run in as many plain
+processes (`parallel`); the global analysis, pure numpy that never touches bpy, runs in a
+worker thread while the generator keeps yielding its progress.
 
 Steps are (stage, done, total) or (stage, done, total, detail), detail a short text about the
 work inside the current unit (which shape, which view).
@@ -153,8 +154,9 @@ def _run_steps(meshes: list[Mesh], options: JobOptions):
 
     # 2. the analysis, on the first n_seeds seeds of each shape; the HOG maps are computed
     # once here because the style regions (stage 3) read them too, and cached beside the
-    # drawings so a second run reads them. What is not cached (maps, the analysis' encoding,
-    # regions) is computed in `jobs` plain processes (`parallel`), in order, the serial result.
+    # drawings so a second run reads them. The maps and regions not cached are computed in
+    # `jobs` plain processes (`parallel`), in order: the serial result. The analysis runs in
+    # one: its k-means and matrix products already use every core through their threads.
     from .. import pipeline
     from ..cache import (AnalysisCache, HogCache, RegionCache, analysis_key, cache_key,
                          drawings_digest, hog_key, images_digest, region_key)
@@ -203,7 +205,7 @@ def _run_steps(meshes: list[Mesh], options: JobOptions):
         result = yield from _in_thread(
             lambda: pipeline.analyse(analysis_drawings, options.params, labels=options.labels,
                                      triplets=options.triplets, progress=progress,
-                                     cancel=stop, maps=maps, jobs=workers),
+                                     cancel=stop, maps=maps),
             box, cancel_flag)
         for k, v in (result.timings or {}).items():
             timings[f"analyse.{k}"] = v
