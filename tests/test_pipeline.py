@@ -245,3 +245,24 @@ def test_dictionaries_are_independent_draws_and_the_first_is_the_seeds(collectio
     assert len(result.view_names) == len(result.view_weights) == len(set(result.view_names))
     assert result.view_names[-1] == "line character"
     assert result.view_weights.sum() == pytest.approx(1.0)
+
+
+def test_labels_place_the_centres_and_name_the_clusters_whatever_the_order():
+    """Two labels per style in three separated groups: every shape gets its group's style (the
+    names come from the labels, not from the cluster numbers), and a reordered input gives the
+    same classes, reordered."""
+    from style_coanalysis import graph
+    from style_coanalysis.pipeline import _label_transduction
+    rng = np.random.default_rng(3)
+    group = np.repeat([0, 1, 2], 20)
+    x = np.array([[0.0, 0.0], [6.0, 0.0], [0.0, 6.0]])[group] + rng.normal(0, 0.7, (60, 2))
+    style_of_group = np.array([2, 0, 1])            # style numbers unrelated to the groups'
+    y = np.full(60, -1)
+    for g in range(3):
+        y[np.flatnonzero(group == g)[:2]] = style_of_group[g]
+    classes, dist = _label_transduction(graph.affinity(x), x, y, 3)
+    assert classes.tolist() == style_of_group[group].tolist()
+    assert np.allclose(dist.sum(axis=1), 1.0)
+    order = rng.permutation(60)
+    again, _ = _label_transduction(graph.affinity(x[order]), x[order], y[order], 3)
+    assert again.tolist() == classes[order].tolist()
