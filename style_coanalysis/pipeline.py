@@ -214,8 +214,9 @@ def _label_transduction(a: np.ndarray, features: np.ndarray, y: np.ndarray, n_cl
     named by the labels (one-to-one matching), the sum of the mean style purities goes 12.35
     -> 12.49 with 2 labels per style, 12.24 -> 12.33 with 10%, 12.99 -> 13.19 with 20%
     (hu2017-60-0 2 labels 0.53 -> 0.64, sample-60 20% 0.61 -> 0.80; hu2017-60-4 2 labels 0.61
-    -> 0.56, hu2017-60-2 20% 0.67 -> 0.58): named afterwards, a cluster the few labels
-    misnamed took the labelled shapes of another style. Earlier: the discriminant chosen on
+    -> 0.56, hu2017-60-2 20% 0.67 -> 0.58; hu2017-all, 537 shapes, 2 labels 0.449 -> 0.430):
+    named afterwards, a cluster the few labels misnamed took the labelled shapes of another
+    style. Earlier: the discriminant chosen on
     ties, or with fewer labels, lost up to 0.07 (sample-cats-2) where it helped elsewhere;
     spreading the labels over the graph (sklearn's LabelSpreading) was below the named
     partition on most collections."""
