@@ -185,14 +185,21 @@ def test_second_job_reads_maps_analysis_and_regions_and_gives_the_same_result(tm
     assert counted == {"hog": 4, "analyse": 6, "localise": 24}   # this run's regions redone
     assert outcome(fourth) == outcome(first)
 
+    # a damaged HOG entry is computed again (the same maps: the analysis and regions are read)
+    damaged = sorted((tmp_path / "hog").rglob("*.npz"))[0]
+    damaged.write_bytes(damaged.read_bytes()[:100])
+    fifth = run(meshes, opts())
+    assert counted == {"hog": 5, "analyse": 6, "localise": 24}
+    assert outcome(fifth) == outcome(first)
+
     # a drawing setting that changes the drawings (the up axis) misses all three
     run(meshes, opts(up="y"))
-    assert counted == {"hog": 8, "analyse": 7, "localise": 28}
+    assert counted == {"hog": 9, "analyse": 7, "localise": 28}
 
     # no cache asked for: nothing read, nothing written
     before = sorted(tmp_path.rglob("*.npz"))
     run(meshes, opts(cache_dir=False))
-    assert counted == {"hog": 12, "analyse": 8, "localise": 32}
+    assert counted == {"hog": 13, "analyse": 8, "localise": 32}
     assert sorted(tmp_path.rglob("*.npz")) == before
 
 

@@ -168,24 +168,23 @@ def _run_steps(meshes: list[Mesh], options: JobOptions):
     maps = MapStore()       # on disk: a collection's maps need not fit in memory
     # each shape's images digest: the HOG key, part of the analysis key
     sums = [images_digest(d.images) for d in drawings] if cached else []
-    found = {}
-    if hogs is not None:
-        for i in range(len(drawings)):
-            hit = hogs.load(hog_key(sums[i]))
-            if hit is not None:
-                found[i] = hit
-    missing = [i for i in range(len(drawings)) if i not in found]
+    # which maps are cached is decided up front, for the workers; each is read only when the
+    # store takes it, so a cached collection's maps are never all in memory
+    present = [hogs is not None and hogs.path(hog_key(s)).exists() for s in sums] or \
+        [False] * len(drawings)
+    missing = [i for i, p in enumerate(present) if not p]
     workers = batch.effective_jobs(options.jobs, len(drawings))
     computed = in_processes(hog_images, ({"images": drawings[i].images} for i in missing),
                             len(missing), workers)
     try:
-        for i in range(len(drawings)):
+        for i, d in enumerate(drawings):
             yield ("hog", i, len(drawings))
-            if i not in found:
-                found[i] = next(computed)
+            m = hogs.load(hog_key(sums[i])) if present[i] else None
+            if m is None:       # not cached, or an entry found damaged now: computed here
+                m = next(computed) if not present[i] else hog_images(d.images)
                 if hogs is not None:
-                    hogs.store(hog_key(sums[i]), found[i])
-            maps.append(found.pop(i))
+                    hogs.store(hog_key(sums[i]), m)
+            maps.append(m)
     finally:
         computed.close()    # a cancel ends the workers now
     timings["hog"] = time.perf_counter() - t0
