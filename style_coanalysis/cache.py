@@ -214,17 +214,6 @@ class HogCache(_NpzStore):
     def store(self, key: str, maps: np.ndarray) -> Path:
         return self.store_arrays(key, {"maps": np.ascontiguousarray(maps, np.float32)})
 
-    def get_or_compute(self, images: np.ndarray, compute: Callable[[], np.ndarray],
-                       images_sum: str | None = None) -> tuple[np.ndarray, bool]:
-        """(maps, was_cached) of `images`; `images_sum` when the caller has their digest."""
-        key = hog_key(images_sum or images_digest(images))
-        hit = self.load(key)
-        if hit is not None:
-            return hit, True
-        maps = compute()
-        self.store(key, maps)
-        return maps, False
-
 
 # ---------------------------------------------------------------- the analysis
 @functools.lru_cache(maxsize=None)

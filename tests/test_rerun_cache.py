@@ -31,12 +31,23 @@ class Counter:
         return features.hog_images(self.imgs)
 
 
+def get_or_compute(cache, imgs, compute):
+    """(maps, was_cached) of `imgs` as the job reads and fills the HOG cache."""
+    key = hog_key(images_digest(imgs))
+    hit = cache.load(key)
+    if hit is not None:
+        return hit, True
+    maps = compute()
+    cache.store(key, maps)
+    return maps, False
+
+
 def test_hog_maps_round_trip_exactly(tmp_path):
     cache, imgs = HogCache(tmp_path), images()
     compute = Counter(imgs)
-    first, cached = cache.get_or_compute(imgs, compute)
+    first, cached = get_or_compute(cache, imgs, compute)
     assert not cached and first.any()
-    again, cached = cache.get_or_compute(imgs.copy(), compute)
+    again, cached = get_or_compute(cache, imgs.copy(), compute)
     assert cached and compute.calls == 1
     assert again.dtype == np.float32 and np.array_equal(again, first)
     assert (tmp_path / "hog").is_dir()               # its own subfolder of the cache root
@@ -45,11 +56,11 @@ def test_hog_maps_round_trip_exactly(tmp_path):
 
 def test_other_images_or_version_miss(tmp_path):
     cache, imgs = HogCache(tmp_path), images()
-    cache.get_or_compute(imgs, Counter(imgs))
+    get_or_compute(cache, imgs, Counter(imgs))
     moved = imgs.copy()
     moved[0, 0, 0] = 1.0 - moved[0, 0, 0]             # one pixel of one view
     compute = Counter(moved)
-    cache.get_or_compute(moved, compute)
+    get_or_compute(cache, moved, compute)
     assert compute.calls == 1
     assert hog_key(images_digest(imgs)) != hog_key(images_digest(imgs), version="hog-other")
     assert hog_key(images_digest(imgs)) != hog_key(images_digest(imgs.astype(np.float64)))
@@ -59,15 +70,15 @@ def test_other_images_or_version_miss(tmp_path):
 def test_damaged_hog_entry_is_recomputed(tmp_path, damage):
     cache, imgs = HogCache(tmp_path), images()
     compute = Counter(imgs)
-    good, _ = cache.get_or_compute(imgs, compute)
+    good, _ = get_or_compute(cache, imgs, compute)
     key = hog_key(images_digest(imgs))
     path = cache.path(key)
     other = images(seed=1)                            # another shape's valid entry
-    cache.get_or_compute(other, Counter(other))
+    get_or_compute(cache, other, Counter(other))
     damage_entry(path, damage, "maps", cache.path(hog_key(images_digest(other))))
     assert cache.load(key) is None
     assert not path.exists()                          # the bad entry is gone
-    again, cached = cache.get_or_compute(imgs, compute)
+    again, cached = get_or_compute(cache, imgs, compute)
     assert not cached and compute.calls == 2
     assert np.array_equal(again, good)
 

@@ -170,7 +170,7 @@ def _run_steps(meshes: list[Mesh], options: JobOptions):
     sums = [images_digest(d.images) for d in drawings] if cached else []
     # which maps are cached is decided up front, for the workers; each is read only when the
     # store takes it, so a cached collection's maps are never all in memory
-    present = [hogs is not None and hogs.path(hog_key(s)).exists() for s in sums] or \
+    present = [hogs.path(hog_key(s)).exists() for s in sums] if hogs is not None else \
         [False] * len(drawings)
     missing = [i for i, p in enumerate(present) if not p]
     workers = batch.effective_jobs(options.jobs, len(drawings))
