@@ -305,7 +305,7 @@ def _views(dicts, keeps, lines, n_dims):
     dictionary, so its share of the fused graph does not change with their number."""
     views, kinds, names = [], [], []
     for d, keep in zip(dicts, keeps):
-        v, names = word_views(d.words[:, keep], d.neighbours, n_dims)
+        v, names = word_views(d.rungs, keep, n_dims)
         views += v
         kinds += range(len(v))
     line_view = style_space(lines, n_dims)
@@ -337,8 +337,8 @@ class Dictionary:
     bank: FilterBank             # the style words (24 px patches)
     words: np.ndarray            # (N, K) word profile
     layout: np.ndarray           # (N, K') layout profile (48 px words)
-    neighbours: np.ndarray       # (N, k) structural look-alikes, nearest first (views.look_alikes)
-    relative: np.ndarray         # (N, K) word profile relative to look-alikes, mean over ladder
+    rungs: list                  # (N, K) per rung of the ladder: word profile relative to look-alikes
+    relative: np.ndarray         # (N, K) their mean over the ladder
 
 
 @dataclass
@@ -432,8 +432,8 @@ def encode(drawings, params: AnalysisParams, maps=None, progress=None) -> Encodi
         words = frequency_features(c[:, None])
         layout = frequency_features(lc[:, None])
         neighbours = look_alikes(layout, k_far)
-        relative = np.mean(structure_relative(words, neighbours, ks), axis=0)
-        dictionaries.append(Dictionary(bank, words, layout, neighbours, relative))
+        rungs = structure_relative(words, neighbours, ks)
+        dictionaries.append(Dictionary(bank, words, layout, rungs, np.mean(rungs, axis=0)))
     timings["encode"] = time.perf_counter() - t
     return Encoding(dictionaries, np.stack(lines), timings)
 

@@ -110,10 +110,12 @@ def style_space(x: np.ndarray, n_dims: int) -> np.ndarray:
     return p / np.maximum(np.linalg.norm(p, axis=1, keepdims=True), 1e-12)
 
 
-def word_views(words: np.ndarray, neighbours: np.ndarray, n_dims: int) -> tuple[list, list]:
+def word_views(rungs: list, keep: np.ndarray, n_dims: int) -> tuple[list, list]:
     """The word views of one dictionary and their names: one structure-relative word view per
-    rung of the neighbour ladder (`neighbours` from `look_alikes`), each in its `n_dims`
-    principal directions (style_space). The pipeline adds the line-character view."""
-    ks = neighbour_ladder(len(words))
-    views = [style_space(r, n_dims) for r in structure_relative(words, neighbours, ks)]
-    return views, [f"words vs {k} look-alikes" for k in ks]
+    rung of the neighbour ladder (`rungs`: structure_relative over `neighbour_ladder(N)`),
+    each restricted to the kept words and put in its `n_dims` principal directions
+    (style_space). A rung's relative profile is linear in each word, so the kept words' columns
+    are the profile of the kept words: the rungs are computed once per encoding, not per round.
+    The pipeline adds the line-character view."""
+    views = [style_space(r[:, keep], n_dims) for r in rungs]
+    return views, [f"words vs {k} look-alikes" for k in neighbour_ladder(len(rungs[0]))]

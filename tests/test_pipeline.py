@@ -163,7 +163,7 @@ def test_structure_relative_words_cancel_what_structural_look_alikes_share():
 def test_look_alike_means_match_a_direct_computation_across_row_blocks():
     """The blocked ladder gives each rung's mean over exactly the k nearest structural
     neighbours, or, past RUNG_SAMPLE of them, over RUNG_SAMPLE spread evenly by rank from the
-    nearest to the k-th (a collection larger than one block of rows)."""
+    nearest to the k-th (a collection larger than one block of rows), word by word."""
     from sklearn.metrics import pairwise_distances
     from style_coanalysis.views import (BLOCK, RUNG_SAMPLE, look_alikes, neighbour_ladder,
                                         rung_ranks, structure_relative)
@@ -183,6 +183,12 @@ def test_look_alike_means_match_a_direct_computation_across_row_blocks():
         assert np.all(np.diff(ranks) > 0)
         expect = words - (words[order[:, ranks]].mean(axis=1) if k < n - 1 else words.mean(0))
         np.testing.assert_allclose(r, expect, atol=1e-9)
+    # the rounds keep some words and slice the rungs computed once: the same as the rungs of
+    # the kept words alone
+    keep = rng.random(words.shape[1]) < 0.5
+    for whole, kept in zip(structure_relative(words, near, ks),
+                           structure_relative(words[:, keep], near, ks)):
+        np.testing.assert_allclose(whole[:, keep], kept, rtol=0, atol=1e-12)
 
 
 def test_the_neighbour_ladder_spans_the_collection():
@@ -218,7 +224,7 @@ def test_encoding_reads_the_shapes_one_at_a_time(collection):
     np.testing.assert_array_equal(lazy.lines, held.lines)
     assert len(lazy.dictionaries) == len(held.dictionaries) == PARAMS.n_dictionaries
     for a, b in zip(lazy.dictionaries, held.dictionaries):
-        for field in ("words", "layout", "relative", "neighbours"):
+        for field in ("words", "layout", "relative", "rungs"):
             np.testing.assert_array_equal(getattr(a, field), getattr(b, field))
 
 
