@@ -335,8 +335,6 @@ class Dictionary:
     """One drawn dictionary of style words and what the clustering rounds read through it."""
 
     bank: FilterBank             # the style words (24 px patches)
-    words: np.ndarray            # (N, K) word profile
-    layout: np.ndarray           # (N, K') layout profile (48 px words)
     rungs: list                  # (N, K) per rung of the ladder: word profile relative to look-alikes
     relative: np.ndarray         # (N, K) their mean over the ladder
 
@@ -430,10 +428,9 @@ def encode(drawings, params: AnalysisParams, maps=None, progress=None) -> Encodi
     dictionaries = []
     for (bank, _), (c, lc) in zip(banks, counts):
         words = frequency_features(c[:, None])
-        layout = frequency_features(lc[:, None])
-        neighbours = look_alikes(layout, k_far)
+        neighbours = look_alikes(frequency_features(lc[:, None]), k_far)   # by layout profile
         rungs = structure_relative(words, neighbours, ks)
-        dictionaries.append(Dictionary(bank, words, layout, rungs, np.mean(rungs, axis=0)))
+        dictionaries.append(Dictionary(bank, rungs, np.mean(rungs, axis=0)))
     timings["encode"] = time.perf_counter() - t
     return Encoding(dictionaries, np.stack(lines), timings)
 
