@@ -61,6 +61,31 @@ def test_each_view_graph_is_sparse_symmetric_and_keeps_ties():
     np.testing.assert_allclose(gp, g[np.ix_(perm, perm)])
 
 
+def test_view_graph_is_the_nearest_shapes_of_the_whole_distance_matrix():
+    """The k-nearest search keeps each shape's N_EDGES nearest with the local-scaling weights of
+    the whole distance matrix; on a grid, where many distances tie exactly but round apart,
+    every tie is kept whatever the order of the shapes."""
+    from scipy.spatial.distance import cdist
+    x, _ = _blobs([200, 150], seed=6)
+    d2 = cdist(x, x, "sqeuclidean")
+    np.fill_diagonal(d2, np.inf)
+    order = np.sort(d2, axis=1)
+    sigma = np.sqrt(order[:, graph.K_NEIGHBOURS - 1])
+    keep = d2 <= order[:, graph.N_EDGES - 1:graph.N_EDGES]
+    ref = np.where(keep, np.exp(-d2 / np.outer(sigma, sigma)), 0.0)
+    np.testing.assert_allclose(graph.affinity(x).toarray(), np.maximum(ref, ref.T), atol=1e-12)
+    cells = np.random.default_rng(3).integers(0, 11, size=(400, 3))
+    grid = cells * 0.73                                   # exact distances: the integer ones
+    d2 = ((cells[:, None, :] - cells[None, :, :]) ** 2).sum(axis=2).astype(float)
+    np.fill_diagonal(d2, np.inf)
+    keep = d2 <= np.sort(d2, axis=1)[:, graph.N_EDGES - 1:graph.N_EDGES]
+    a = graph.affinity(grid).toarray()
+    np.testing.assert_array_equal(a > 0, keep | keep.T)
+    for seed in range(3):
+        perm = np.random.default_rng(seed).permutation(len(grid))
+        np.testing.assert_array_equal(graph.affinity(grid[perm]).toarray(), a[np.ix_(perm, perm)])
+
+
 def test_large_graphs_are_solved_like_small_ones():
     """The Lanczos solver used above DENSE_BELOW shapes finds the dense solver's eigenvalues."""
     from scipy.linalg import eigh
