@@ -102,11 +102,13 @@ def style_space(x: np.ndarray, n_dims: int) -> np.ndarray:
 
     Standardising lets rare ornament words count as much as frequent ones; the principal
     directions keep what many features vary along together (a style is a set of ornaments
-    that occur together); unit rows make distances compare directions."""
+    that occur together); unit rows make distances compare directions. The principal directions
+    come from the (K, K) covariance rather than an SVD of the (N, K) rows: the same subspace
+    (distances between rows do not see a direction's sign), several times faster for N >> K."""
     x = np.asarray(x, np.float64)
     x = (x - x.mean(axis=0)) / (x.std(axis=0) + 1e-9)
     d = int(min(n_dims, x.shape[1], max(len(x) - 1, 1)))
-    p = PCA(d, svd_solver="full").fit_transform(x) if d >= 1 else x
+    p = PCA(d, svd_solver="covariance_eigh").fit_transform(x) if d >= 1 else x
     return p / np.maximum(np.linalg.norm(p, axis=1, keepdims=True), 1e-12)
 
 
