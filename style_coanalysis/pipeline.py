@@ -269,8 +269,8 @@ def _label_metric_graph(a: np.ndarray, features: np.ndarray, y: np.ndarray) -> n
 
 
 def _cluster(a, features, params, y, trip, n_clusters):
-    """(clusters, confidence, n_clusters) in the mode the constraints ask for, from the fused
-    style graph `a` (and, with labels, the shapes' style features)."""
+    """(clusters, confidence, n_clusters, spectral coordinates) in the mode the constraints ask
+    for, from the fused style graph `a` (and, with labels, the shapes' style features)."""
     rs = params.random_state
     fused = _coordinates(a, params)
     if y is not None:
@@ -278,7 +278,7 @@ def _cluster(a, features, params, y, trip, n_clusters):
         clusters, dist = _label_transduction(a, features, y, n_cls)
         conf = dist[np.arange(a.shape[0]), clusters] / np.maximum(dist.sum(axis=1), 1e-12)
         conf[y >= 0] = 1.0
-        return clusters, np.clip(conf, 0, 1), n_cls
+        return clusters, np.clip(conf, 0, 1), n_cls, fused
     if trip is not None:
         from .clustering import TripletClustering
         model_t = TripletClustering(n_clusters=n_clusters, random_state=rs)
@@ -286,9 +286,9 @@ def _cluster(a, features, params, y, trip, n_clusters):
         memb = np.asarray(model_t.membership_, np.float64)
         conf = memb[np.arange(len(raw)), raw] / np.maximum(memb.sum(axis=1), 1e-12)
         clusters = _relabel_by_appearance(raw)
-        return clusters, np.clip(conf, 0, 1), int(len(np.unique(clusters)))
+        return clusters, np.clip(conf, 0, 1), int(len(np.unique(clusters))), fused
     clusters = _relabel_by_appearance(graph.partition(a, n_clusters, rs))
-    return clusters, _soft_confidence(fused, clusters), int(len(np.unique(clusters)))
+    return clusters, _soft_confidence(fused, clusters), int(len(np.unique(clusters))), fused
 
 
 def _coordinates(a: np.ndarray, params: AnalysisParams) -> np.ndarray:
@@ -485,7 +485,7 @@ def analyse(drawings: list[ShapeDrawings], params: AnalysisParams,
         prog.step("cluster", r, params.max_rounds)
         if y is None and n_clusters is None:                  # chosen once, in round 0
             n_clusters = _choose_n_clusters(views, a, fusion, n)
-        clusters, conf, n_c = _cluster(a, features, params, y, trip, n_clusters)
+        clusters, conf, n_c, fused = _cluster(a, features, params, y, trip, n_clusters)
         timings["cluster"] = timings.get("cluster", 0.0) + time.perf_counter() - t
 
         t = time.perf_counter()
@@ -509,7 +509,6 @@ def analyse(drawings: list[ShapeDrawings], params: AnalysisParams,
 
     # the result's words: the first dictionary's (drawn with the analysis seed)
     bank, sel = dicts[0].bank, sels[0]
-    fused = _coordinates(a, params)
     final = np.flatnonzero(sel.keep)
     best = sel.scores.argmax(axis=0) if sel.scores.size else np.zeros(len(bank), np.int64)
     cluster_ids = np.unique(clusters)
