@@ -20,12 +20,12 @@ import functools
 import hashlib
 import json
 import os
-import tempfile
 from pathlib import Path
 from typing import Callable
 
 import numpy as np
 
+from . import atomic
 from .drawings import ShapeDrawings
 from .meshes import Mesh
 
@@ -94,24 +94,13 @@ class _NpzStore:
             pass
 
     def store_arrays(self, key: str, arrays: dict, compress: bool = True) -> Path:
-        """Write atomically: a temporary file in the same folder, then `os.replace`."""
+        """Whole or not at all (`atomic`), with the key and a checksum beside the arrays."""
         path = self.path(key)
         path.parent.mkdir(parents=True, exist_ok=True)
         arrays = {k: np.asarray(v) for k, v in arrays.items()}
-        save = np.savez_compressed if compress else np.savez
-        fd, tmp = tempfile.mkstemp(prefix=".tmp-", suffix=".npz", dir=path.parent)
-        try:
-            with os.fdopen(fd, "wb") as f:
-                save(f, _key=np.array(key), _checksum=np.array(arrays_checksum(arrays)), **arrays)
-                f.flush()
-                os.fsync(f.fileno())
-            os.replace(tmp, path)
-        except BaseException:
-            try:
-                os.unlink(tmp)
-            except OSError:
-                pass
-            raise
+        data = atomic.npz_bytes({"_key": np.array(key), "_checksum": np.array(arrays_checksum(arrays)),
+                                 **arrays}, compress)
+        atomic.write_bytes(path, data, fsync=True)
         return path
 
 

@@ -15,12 +15,12 @@ from __future__ import annotations
 
 import html
 import json
-import os
 from pathlib import Path
 
 import numpy as np
 from PIL import Image, ImageDraw
 
+from . import atomic
 from .rig import project
 
 ORANGE = np.array([255, 140, 0], np.float64)
@@ -35,9 +35,7 @@ PATCH_ZOOM = 3       # style patches are small (24 px): shown three times larger
 
 
 def write_json(report: dict, path) -> None:
-    tmp = Path(str(path) + ".tmp")
-    tmp.write_text(json.dumps(report, indent=2, default=_json_default))
-    os.replace(tmp, path)
+    atomic.write_text(path, json.dumps(report, indent=2, default=_json_default))
 
 
 def _json_default(o):

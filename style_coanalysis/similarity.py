@@ -16,8 +16,6 @@ collection.
 """
 from __future__ import annotations
 
-import os
-import tempfile
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -27,6 +25,7 @@ from scipy.special import expit, log1p
 from sklearn.model_selection import KFold
 from sklearn.preprocessing import normalize
 
+from . import atomic
 from .meshes import InputError
 
 SPACE_FILE = "style_space.npz"
@@ -204,17 +203,8 @@ class StyleSpace:
                 "weights": self.weights}
 
     def save(self, path) -> None:
-        """Written to a temporary file beside `path`, then renamed: never half a file."""
-        path = Path(path)
-        fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".npz", dir=path.parent)
-        try:
-            with os.fdopen(fd, "wb") as fh:
-                np.savez(fh, **self.to_dict())
-            os.replace(tmp, path)
-        except BaseException:
-            if os.path.exists(tmp):
-                os.remove(tmp)
-            raise
+        """Whole or not at all (`atomic`)."""
+        atomic.write_bytes(path, atomic.npz_bytes(self.to_dict(), compress=False))
 
     @classmethod
     def from_dict(cls, d) -> "StyleSpace":

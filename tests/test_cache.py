@@ -43,7 +43,8 @@ def test_second_lookup_hits_and_round_trips(tmp_path):
     # same geometry under another name shares the entry and takes the caller's name
     renamed, cached = cache.get_or_compute(tetra("other"), s, compute)
     assert cached and renamed.name == "other"
-    assert not list(tmp_path.rglob(".tmp-*"))         # no temporary files left behind
+    files = [p for p in tmp_path.rglob("*") if p.is_file()]
+    assert files and all(p.suffix == ".npz" and not p.name.startswith(".") for p in files)  # no temporaries
 
 
 def test_moved_vertex_or_other_settings_miss(tmp_path):
@@ -129,3 +130,28 @@ def test_collection_in_worker_processes_matches_in_process(tmp_path):
     for p, q in zip(par, seq):
         assert np.array_equal(p.images, q.images) and np.array_equal(p.seed_visible, q.seed_visible)
     assert normalise(shapes[0]).vertices.shape[0] == par[0].vertex_visible.shape[1]
+
+
+def test_ctrl_c_while_writing_leaves_nothing_and_reports_nothing(tmp_path, monkeypatch):
+    """Ctrl-C in the middle of writing an entry (CI once caught it there): no entry, no
+    temporary, and no zip writer left on a closed file to print a traceback when collected."""
+    import gc
+    import sys
+    cache, mesh = DrawingCache(tmp_path), tetra()
+    drawings = fake_drawings(mesh, np.random.default_rng(0))
+    calls, write_array = [], np.lib.format.write_array
+
+    def interrupted(*args, **kwargs):
+        calls.append(1)
+        if len(calls) == 3:
+            raise KeyboardInterrupt
+        return write_array(*args, **kwargs)
+
+    monkeypatch.setattr(np.lib.format, "write_array", interrupted)
+    unraisable = []
+    monkeypatch.setattr(sys, "unraisablehook", unraisable.append)
+    with pytest.raises(KeyboardInterrupt):
+        cache.store(cache_key(mesh, DrawingSettings()), drawings)
+    gc.collect()
+    assert len(calls) == 3 and not unraisable
+    assert not [p for p in tmp_path.rglob("*") if p.is_file()]

@@ -10,9 +10,9 @@ from __future__ import annotations
 
 import os
 import sys
-import tempfile
 from pathlib import Path
 
+from .. import atomic
 from ..meshes import InputError
 from ..similarity import StyleSpace
 from ..suggest import suggest
@@ -45,14 +45,6 @@ def run(args) -> int:
     if out is None:
         sys.stdout.write(text)
         return 0
-    fd, tmp = tempfile.mkstemp(prefix=f".{out.name}.", dir=out.parent)
-    try:
-        with os.fdopen(fd, "w", encoding="utf-8") as fh:
-            fh.write(text)
-        os.replace(tmp, out)
-    except BaseException:
-        if os.path.exists(tmp):
-            os.remove(tmp)
-        raise
+    atomic.write_text(out, text)
     print(f"wrote {out}", file=sys.stderr)
     return 0
