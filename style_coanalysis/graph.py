@@ -5,26 +5,32 @@ where they see structure rather than style (the view compared with few look-alik
 the one compared with the whole collection sees category), and agree on style. A weighted mean
 of the views' graphs keeps an edge strong only where several views make it, so what they agree
 on dominates the cut; the spectral cut then needs no assumption on cluster shape. Measured on the
-17 benchmark collections with k given (bench/bench_fusion.py, 3 seeds, same encoding), sum of the
-mean style purities: this mean 12.07, PSLF over the same views 10.53 (below on 14 of 17),
+17 benchmark collections with k given (bench/bench_fusion.py, 3 seeds, same encoding, each graph
+of the 20 nearest), sum of the mean style purities: this mean 12.07, PSLF over the same views 10.53 (below on 14 of 17),
 concatenation 11.98, PCA of it 11.61 (README). The views weigh the same: weights from each view's
 spectral gap at k, or AMGL's (Nie et al. 2016, a view's weight falling with its roughness on the
 fused cut) gave 5.38 and 5.37 against 5.45 on the first 8 collections.
 
-Each view's graph links every shape to its `N_EDGES` nearest shapes (and theirs to it), with the
+Each view's graph links every shape to its nearest shapes (and theirs to it), with the
 local-scaling affinity of self-tuning spectral clustering (Zelnik-Manor and Perona 2004):
 A_ij = exp(-d_ij^2 / (s_i s_j)), s_i the distance to the i-th shape's 7th neighbour (their
-value), so dense and sparse parts of a view are treated alike. Why a sparse graph: beyond its
-nearest shapes a shape's affinities only order shapes that are not alike, which the cut should
-not read, and a dense graph costs N^2 memory and an N^3 eigensolver (5,000 shapes: 200 MB per
-view). Measured on the generalisation benchmark (17 collections x 7 modes, 3 seeds; sum of
-the mean style purities per mode, k given / automatic / 2 labels per style / 20% labels):
-every shape linked to all 11.76 / 10.72 / 12.05 / 12.81, to its 40 nearest 11.79 / 10.86 /
-12.17 / 12.66, to its 20 nearest 12.10 / 11.00 / 12.39 / 12.99 (sample-cats-2 with k given
-0.69 -> 0.78, sample-cats-1 0.85 -> 0.92, sample-styles-2 0.92 -> 0.97; results
-generalisation_f/k/j.json). Not reached with it: the automatic k of sample-120 drawn again at
-coordinates x 1.0000001 moved from 3 to 5 (two spectral gaps 0.0959 and 0.0962; 40 kept 3).
-Only each shape's nearest are held, so memory grows with N, not N^2.
+value), so dense and sparse parts of a view are treated alike. How many nearest: all of 5, 10,
+20, 40, 80 and 160 below N / 2, their graphs averaged (`ladder_affinity`), so a pair's weight
+also counts the scales that link it and no neighbour count is chosen for one collection size.
+Why a sparse graph: beyond its nearest shapes a shape's affinities only order shapes that are
+not alike, which the cut should not read, and a dense graph costs N^2 memory and an N^3
+eigensolver (5,000 shapes: 200 MB per view). Measured on the generalisation benchmark (17
+collections, 3 seeds; sum of the mean style purities per mode). One dictionary, k given /
+automatic / 2 labels per style / 20% labels: every shape linked to all 11.76 / 10.72 / 12.05 /
+12.81, to its 40 nearest 11.79 / 10.86 / 12.17 / 12.66, to its 20 nearest 12.10 / 11.00 /
+12.39 / 12.99 (generalisation_f/k/j.json). Five dictionaries, k given: 40 nearest 11.89, 20
+12.07, 15 11.97, 10 12.41, 5 12.36, the ladder 12.35; 10 nearest and the ladder against 20:
+automatic k 11.13 and 11.11 against 11.05, 2 labels 12.67 and 12.65 against 12.49, 20% labels
+13.43 and 13.39 against 13.19. Ten nearest alone moved with the drawings: collection2 read
+back from .blend ARI 0.67 with k given (0.95 with 20), from OBJ with automatic k 0.69 (0.87),
+sample-120 from OBJ 0.82 (0.98); the ladder keeps them (README, "Generalisation"). The
+automatic k reads 40-nearest graphs (`pipeline._choose_n_clusters`). Only each shape's nearest
+are held, so memory grows with N, not N^2.
 
 Order of the input: every step is equivariant to a permutation of the shapes (a neighbour tied
 with the last one kept is kept too) except k-means' initialisation, so k-means runs on the rows
@@ -43,7 +49,9 @@ from sklearn.neighbors import NearestNeighbors
 from sklearn.preprocessing import normalize
 
 K_NEIGHBOURS = 7          # the local scale: distance to the 7th neighbour (Zelnik-Manor, Perona)
-N_EDGES = 20              # each shape's edges in a view's graph: its nearest shapes
+N_EDGES = 20              # a nearest-shape graph's edges (`affinity`; the automatic k reads
+                          # graphs of twice as many)
+EDGE_LADDER = (5, 10, 20, 40, 80, 160)   # the scales of a view's graph (`ladder_affinity`)
 BLOCK = 256               # whole distance rows held at once (rows with ties)
 TIE = 1e-9                # distances this close (relative to the squared norms) are ties
 DENSE_BELOW = 300         # smaller graphs are solved densely (exact, and faster there)
@@ -61,20 +69,36 @@ def affinity(x: np.ndarray, k_neighbours: int = K_NEIGHBOURS,
     whole distance row. Ties are equal up to the rounding of |a|^2 + |b|^2 - 2 a.b (`TIE` of
     |a|^2 + max |b|^2), which depends on where a row sits in the computation's blocks, so
     that the graph does not depend on the order of the shapes."""
+    return affinities(x, [n_edges], k_neighbours)[0]
+
+
+def affinities(x: np.ndarray, edges, k_neighbours: int = K_NEIGHBOURS) -> list:
+    """`affinity(x, k_neighbours, e)` for every e of `edges`, from one k-nearest search."""
     x = np.asarray(x, np.float64)
     n = len(x)
     k = min(k_neighbours, n - 1)
-    m = min(max(n_edges, k), n - 1)
+    ms = [min(max(int(e), k), n - 1) for e in edges]
     sq = np.einsum("ij,ij->i", x, x)
     tol = TIE * (sq + sq.max(initial=0.0))
-    if m < n - 1:
-        d2, nbr = NearestNeighbors(n_neighbors=m + 1, algorithm="brute", metric="sqeuclidean") \
+    top = max(ms)
+    if top < n - 1:
+        d2, nbr = NearestNeighbors(n_neighbors=top + 1, algorithm="brute", metric="sqeuclidean") \
             .fit(x).kneighbors()                   # ascending; a row is not its own neighbour
+        knn_sigma = np.sqrt(np.maximum(d2[:, k - 1], 1e-24))
+    else:
+        d2, nbr, knn_sigma = np.zeros((n, 0)), np.zeros((n, 0), np.int64), np.empty(n)
+    return [_nearest_graph(x, d2, nbr, knn_sigma, m, k, tol) for m in ms]
+
+
+def _nearest_graph(x, d2, nbr, knn_sigma, m: int, k: int, tol) -> sparse.csr_matrix:
+    """The graph of each row's m nearest (`affinity`), from the k-nearest search's
+    ascending squared distances `d2` and indices `nbr` (at least m + 1 columns unless m = N - 1)."""
+    n = len(x)
+    sigma = knn_sigma.copy()
+    if m < n - 1:
         tied = d2[:, m] <= d2[:, m - 1] + tol
-        sigma = np.sqrt(np.maximum(d2[:, k - 1], 1e-24))
     else:                                          # every other row is a neighbour
-        d2, nbr, tied, sigma = np.zeros((n, 0)), np.zeros((n, 0), np.int64), \
-            np.ones(n, bool), np.empty(n)
+        tied = np.ones(n, bool)
     plain = np.flatnonzero(~tied)
     rows, cols, d2s = [np.repeat(plain, m)], [nbr[plain, :m].ravel()], [d2[plain, :m].ravel()]
     whole = np.flatnonzero(tied)
@@ -88,9 +112,23 @@ def affinity(x: np.ndarray, k_neighbours: int = K_NEIGHBOURS,
         rows.append(sub[r])
         cols.append(c)
         d2s.append(row[r, c])
-    r, c, d2 = np.concatenate(rows), np.concatenate(cols), np.concatenate(d2s)
-    a = sparse.csr_matrix((np.exp(-d2 / (sigma[r] * sigma[c])), (r, c)), shape=(n, n))
+    r, c, d2v = np.concatenate(rows), np.concatenate(cols), np.concatenate(d2s)
+    a = sparse.csr_matrix((np.exp(-d2v / (sigma[r] * sigma[c])), (r, c)), shape=(n, n))
     return a.maximum(a.T).tocsr()
+
+
+def edge_ladder(n: int) -> list:
+    """The scales of `ladder_affinity` for N shapes: those of `EDGE_LADDER` below N / 2 (at
+    least the first)."""
+    return [e for e in EDGE_LADDER if e < n / 2] or [EDGE_LADDER[0]]
+
+
+def ladder_affinity(x: np.ndarray, k_neighbours: int = K_NEIGHBOURS) -> sparse.csr_matrix:
+    """The mean of the nearest-shape graphs (`affinity`) at every scale of `edge_ladder(N)`,
+    from one k-nearest search: a pair's weight grows with the number of scales that link it,
+    so each shape's nearest count most, and no one neighbour count is chosen for the
+    collection at hand."""
+    return fuse(affinities(x, edge_ladder(len(x)), k_neighbours))
 
 
 def fuse(graphs: list, weights=None) -> sparse.csr_matrix:

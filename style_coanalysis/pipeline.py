@@ -161,13 +161,14 @@ def _soft_confidence(x: np.ndarray, clusters: np.ndarray) -> np.ndarray:
     return p[np.arange(len(x)), np.searchsorted(ids, clusters)]
 
 
-def _graphs(views, n_edges: int = graph.N_EDGES) -> list:
-    """graph.affinity of each view; a view that recurs (the line character, once per
-    dictionary) is computed once."""
+def _graphs(views, n_edges: int | None = None) -> list:
+    """The graph of each view (`graph.ladder_affinity`, or `graph.affinity` with `n_edges`);
+    a view that recurs (the line character, once per dictionary) is computed once."""
     made = {}
     for v in views:
         if id(v) not in made:
-            made[id(v)] = graph.affinity(v, n_edges=n_edges)
+            made[id(v)] = graph.ladder_affinity(v) if n_edges is None else \
+                graph.affinity(v, n_edges=n_edges)
     return [made[id(v)] for v in views]
 
 
