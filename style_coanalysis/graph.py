@@ -15,8 +15,8 @@ Each view's graph links every shape to its nearest shapes (and theirs to it), wi
 local-scaling affinity of self-tuning spectral clustering (Zelnik-Manor and Perona 2004):
 A_ij = exp(-d_ij^2 / (s_i s_j)), s_i the distance to the i-th shape's 7th neighbour (their
 value), so dense and sparse parts of a view are treated alike. How many nearest: all of 5, 10,
-20, 40, 80 and 160 below N / 2, their graphs averaged (`ladder_affinity`), so a pair's weight
-also counts the scales that link it and no neighbour count is chosen for one collection size.
+20 and 40 below N / 2, their graphs averaged (`ladder_affinity`), so a pair's weight also
+counts the scales that link it and no one neighbour count is chosen for the collection.
 Why a sparse graph: beyond its nearest shapes a shape's affinities only order shapes that are
 not alike, which the cut should not read, and a dense graph costs N^2 memory and an N^3
 eigensolver (5,000 shapes: 200 MB per view). Measured on the generalisation benchmark (17
@@ -28,9 +28,11 @@ automatic / 2 labels per style / 20% labels: every shape linked to all 11.76 / 1
 automatic k 11.13 and 11.11 against 11.05, 2 labels 12.67 and 12.65 against 12.49, 20% labels
 13.43 and 13.39 against 13.19. Ten nearest alone moved with the drawings: collection2 read
 back from .blend ARI 0.67 with k given (0.95 with 20), from OBJ with automatic k 0.69 (0.87),
-sample-120 from OBJ 0.82 (0.98); the ladder keeps them (README, "Generalisation"). The
-automatic k reads 40-nearest graphs (`pipeline._choose_n_clusters`). Only each shape's nearest
-are held, so memory grows with N, not N^2.
+sample-120 from OBJ 0.82 (0.98); the ladder keeps them (README, "Generalisation"). Scales of
+80 and 160 as well (for N above 160 and 320) cost 3x per shape at 5,000 shapes and scored lower
+on hu2017-all (537 shapes, k given 0.427 against 0.435). The automatic k reads 40-nearest graphs
+(`pipeline._choose_n_clusters`). Only each shape's nearest are held, so memory grows with N, not
+N^2, and a view's graph costs the same per shape at any N but for the all-pairs search.
 
 Order of the input: every step is equivariant to a permutation of the shapes (a neighbour tied
 with the last one kept is kept too) except k-means' initialisation, so k-means runs on the rows
@@ -51,7 +53,7 @@ from sklearn.preprocessing import normalize
 K_NEIGHBOURS = 7          # the local scale: distance to the 7th neighbour (Zelnik-Manor, Perona)
 N_EDGES = 20              # a nearest-shape graph's edges (`affinity`; the automatic k reads
                           # graphs of twice as many)
-EDGE_LADDER = (5, 10, 20, 40, 80, 160)   # the scales of a view's graph (`ladder_affinity`)
+EDGE_LADDER = (5, 10, 20, 40)            # the scales of a view's graph (`ladder_affinity`)
 BLOCK = 256               # whole distance rows held at once (rows with ties)
 TIE = 1e-9                # distances this close (relative to the squared norms) are ties
 DENSE_BELOW = 300         # smaller graphs are solved densely (exact, and faster there)
