@@ -7,9 +7,10 @@ of the views' graphs keeps an edge strong only where several views make it, so w
 on dominates the cut; the spectral cut then needs no assumption on cluster shape. Measured on the
 17 benchmark collections with k given (bench/bench_fusion.py, 3 seeds, same encoding, each graph
 of the 20 nearest), sum of the mean style purities: this mean 12.07, PSLF over the same views
-10.53 (below on 14 of 17), concatenation 11.98, PCA of it 11.61 (README). The views weigh the same: weights from each view's
-spectral gap at k, or AMGL's (Nie et al. 2016, a view's weight falling with its roughness on the
-fused cut) gave 5.38 and 5.37 against 5.45 on the first 8 collections.
+10.53 (below on 14 of 17), concatenation 11.98, PCA of it 11.61 (README). The views weigh the
+same: weights from each view's spectral gap at k, or AMGL's (Nie et al. 2016, a view's weight
+falling with its roughness on the fused cut) gave 5.38 and 5.37 against 5.45 on the first 8
+collections.
 
 Each view's graph links every shape to its nearest shapes (and theirs to it), with the
 local-scaling affinity of self-tuning spectral clustering (Zelnik-Manor and Perona 2004):
