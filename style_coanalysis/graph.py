@@ -16,7 +16,7 @@ Each view's graph links every shape to its nearest shapes (and theirs to it), wi
 local-scaling affinity of self-tuning spectral clustering (Zelnik-Manor and Perona 2004):
 A_ij = exp(-d_ij^2 / (s_i s_j)), s_i the distance to the i-th shape's 7th neighbour (their
 value), so dense and sparse parts of a view are treated alike. How many nearest: all of 5, 10,
-20 and 40 below N / 2, their graphs averaged (`ladder_affinity`), so a pair's weight also
+20 and 40 below N / 2, their graphs averaged (`ladder_affinities`), so a pair's weight also
 counts the scales that link it and no one neighbour count is chosen for the collection.
 Why a sparse graph: beyond its nearest shapes a shape's affinities only order shapes that are
 not alike, which the cut should not read, and a dense graph costs N^2 memory and an N^3
@@ -32,7 +32,7 @@ back from .blend ARI 0.67 with k given (0.95 with 20), from OBJ with automatic k
 sample-120 from OBJ 0.82 (0.98); the ladder keeps them (README, "Generalisation"). Scales of
 80 and 160 as well (for N above 160 and 320) cost 3x per shape at 5,000 shapes and scored lower
 on hu2017-all (537 shapes, k given 0.427 against 0.435). The automatic k reads 40-nearest graphs
-(`pipeline._choose_n_clusters`). Only each shape's nearest are held, so memory grows with N, not
+(`pipeline._choose_n_clusters`; the ladder's graph instead: right on 15 of 51 runs, against 27). Only each shape's nearest are held, so memory grows with N, not
 N^2, and a view's graph costs the same per shape at any N but for the all-pairs search.
 
 Order of the input: every step is equivariant to a permutation of the shapes (a neighbour tied
@@ -52,9 +52,9 @@ from sklearn.neighbors import NearestNeighbors
 from sklearn.preprocessing import normalize
 
 K_NEIGHBOURS = 7          # the local scale: distance to the 7th neighbour (Zelnik-Manor, Perona)
-N_EDGES = 20              # a nearest-shape graph's edges (`affinity`; the automatic k reads
-                          # graphs of twice as many)
-EDGE_LADDER = (5, 10, 20, 40)            # the scales of a view's graph (`ladder_affinity`)
+N_EDGES = 20              # a nearest-shape graph's edges (`affinity`)
+CHOICE_EDGES = 40         # the edges of the graphs the automatic k reads
+EDGE_LADDER = (5, 10, 20, 40)            # the scales of a view's graph (`ladder_affinities`)
 BLOCK = 256               # whole distance rows held at once (rows with ties)
 TIE = 1e-9                # distances this close (relative to the squared norms) are ties
 DENSE_BELOW = 300         # smaller graphs are solved densely (exact, and faster there)
@@ -83,9 +83,9 @@ def affinities(x: np.ndarray, edges, k_neighbours: int = K_NEIGHBOURS) -> list:
     ms = [min(max(int(e), k), n - 1) for e in edges]
     sq = np.einsum("ij,ij->i", x, x)
     tol = TIE * (sq + sq.max(initial=0.0))
-    top = max(ms)
-    if top < n - 1:
-        d2, nbr = NearestNeighbors(n_neighbors=top + 1, algorithm="brute", metric="sqeuclidean") \
+    if min(ms) < n - 1:                            # (a graph of all N - 1 reads whole rows)
+        d2, nbr = NearestNeighbors(n_neighbors=min(max(ms) + 1, n - 1), algorithm="brute",
+                                   metric="sqeuclidean") \
             .fit(x).kneighbors()                   # ascending; a row is not its own neighbour
         knn_sigma = np.sqrt(np.maximum(d2[:, k - 1], 1e-24))
     else:
@@ -121,17 +121,22 @@ def _nearest_graph(x, d2, nbr, knn_sigma, m: int, k: int, tol) -> sparse.csr_mat
 
 
 def edge_ladder(n: int) -> list:
-    """The scales of `ladder_affinity` for N shapes: those of `EDGE_LADDER` below N / 2 (at
+    """The scales of `ladder_affinities` for N shapes: those of `EDGE_LADDER` below N / 2 (at
     least the first)."""
     return [e for e in EDGE_LADDER if e < n / 2] or [EDGE_LADDER[0]]
 
 
-def ladder_affinity(x: np.ndarray, k_neighbours: int = K_NEIGHBOURS) -> sparse.csr_matrix:
-    """The mean of the nearest-shape graphs (`affinity`) at every scale of `edge_ladder(N)`,
-    from one k-nearest search: a pair's weight grows with the number of scales that link it,
-    so each shape's nearest count most, and no one neighbour count is chosen for the
-    collection at hand."""
-    return fuse(affinities(x, edge_ladder(len(x)), k_neighbours))
+def ladder_affinities(x: np.ndarray, extra_edges=(),
+                      k_neighbours: int = K_NEIGHBOURS) -> tuple:
+    """The mean of the nearest-shape graphs (`affinity`) at every scale of `edge_ladder(N)`, and
+    the graphs at `extra_edges` nearest, all from one k-nearest search (a scale both ask for is
+    built once). In the mean a pair's weight grows with the number of scales that link it, so
+    each shape's nearest count most, and no one neighbour count is chosen for the collection
+    at hand."""
+    ladder = edge_ladder(len(x))
+    edges = list(dict.fromkeys([*ladder, *extra_edges]))
+    made = dict(zip(edges, affinities(x, edges, k_neighbours)))
+    return fuse([made[e] for e in ladder]), [made[e] for e in extra_edges]
 
 
 def fuse(graphs: list, weights=None) -> sparse.csr_matrix:

@@ -161,39 +161,44 @@ def _soft_confidence(x: np.ndarray, clusters: np.ndarray) -> np.ndarray:
     return p[np.arange(len(x)), np.searchsorted(ids, clusters)]
 
 
-def _graphs(views, n_edges: int | None = None) -> list:
-    """The graph of each view (`graph.ladder_affinity`, or `graph.affinity` with `n_edges`);
-    a view that recurs (the line character, once per dictionary) is computed once."""
+def _graphs(views, choice: bool = False) -> tuple[list, list | None]:
+    """The graph of each view (`graph.ladder_affinities`) and, with `choice`, its graph at
+    `graph.CHOICE_EDGES` nearest that the automatic k reads, from the same nearest-shape search
+    (None without); a view that recurs (the line character, once per dictionary) is computed
+    once."""
     made = {}
     for v in views:
         if id(v) not in made:
-            made[id(v)] = graph.ladder_affinity(v) if n_edges is None else \
-                graph.affinity(v, n_edges=n_edges)
-    return [made[id(v)] for v in views]
+            made[id(v)] = graph.ladder_affinities(v, [graph.CHOICE_EDGES] if choice else [])
+    return [made[id(v)][0] for v in views], \
+        [made[id(v)][1][0] for v in views] if choice else None
 
 
-def _style_graph(views, params, y, fusion):
-    """The fused style graph (N, N) and the weight of each view in it.
+def _style_graph(views, params, y, fusion, choice: bool = False):
+    """The fused style graph (N, N), the weight of each view in it, and, with `choice`, the
+    graph the automatic k reads (`_choose_n_clusters`; None without).
 
     fusion "graph" (default): the mean of the views' graphs. The other fusions fuse the views'
     features first and build one graph of the result, for comparison: "pslf" (paper 4.3, its
-    learned view weights; the views shifted to be non-negative), "concat", "pca", "cca"."""
+    learned view weights; the views shifted to be non-negative), "concat", "pca", "cca"; the
+    automatic k reads that graph."""
     if fusion == "graph":
-        graphs = _graphs(views)
+        graphs, choice_graphs = _graphs(views, choice)
         weights = np.full(len(views), 1.0 / len(views))
-        return graph.fuse(graphs, weights), weights
+        return graph.fuse(graphs, weights), weights, \
+            graph.fuse(choice_graphs) if choice else None
     shifted = [v - v.min(axis=0) for v in views]
     if fusion == "pslf":
         from .pslf import PSLF
         model = PSLF(n_components=params.n_components, eta=params.eta, lam=params.lam,
                      beta=params.beta, gamma=params.gamma, random_state=params.random_state,
                      scaling="none")
-        fused = model.fit_transform(shifted, y=y)
-        return graph.affinity(fused), np.asarray(model.view_weights_)
+        fused = graph.affinity(model.fit_transform(shifted, y=y))
+        return fused, np.asarray(model.view_weights_), fused if choice else None
     from . import fusion as fusion_mod
     cls = {"concat": "ConcatFusion", "pca": "PCAFusion", "cca": "CCAFusion"}[fusion]
-    fused = np.asarray(getattr(fusion_mod, cls)().fit_transform(shifted))
-    return graph.affinity(fused), None
+    fused = graph.affinity(np.asarray(getattr(fusion_mod, cls)().fit_transform(shifted)))
+    return fused, None, fused if choice else None
 
 
 def _label_transduction(a: np.ndarray, features: np.ndarray, y: np.ndarray, n_classes: int):
@@ -270,26 +275,27 @@ def _label_metric_graph(a: np.ndarray, features: np.ndarray, y: np.ndarray) -> n
 
 
 def _cluster(a, features, params, y, trip, n_clusters):
-    """(clusters, confidence, n_clusters, spectral coordinates) in the mode the constraints ask
-    for, from the fused style graph `a` (and, with labels, the shapes' style features)."""
+    """(clusters, confidence, n_clusters) in the mode the constraints ask for, from the fused
+    style graph `a` (and, with labels, the shapes' style features). The unsupervised cut's
+    confidence is None here: it is read from the last round's spectral coordinates
+    (`_soft_confidence`), which only that round needs."""
     rs = params.random_state
-    fused = _coordinates(a, params)
     if y is not None:
         n_cls = int(y.max()) + 1
         clusters, dist = _label_transduction(a, features, y, n_cls)
         conf = dist[np.arange(a.shape[0]), clusters] / np.maximum(dist.sum(axis=1), 1e-12)
         conf[y >= 0] = 1.0
-        return clusters, np.clip(conf, 0, 1), n_cls, fused
+        return clusters, np.clip(conf, 0, 1), n_cls
     if trip is not None:
         from .clustering import TripletClustering
         model_t = TripletClustering(n_clusters=n_clusters, random_state=rs)
-        raw = np.asarray(model_t.fit_predict(fused, trip))
+        raw = np.asarray(model_t.fit_predict(_coordinates(a, params), trip))
         memb = np.asarray(model_t.membership_, np.float64)
         conf = memb[np.arange(len(raw)), raw] / np.maximum(memb.sum(axis=1), 1e-12)
         clusters = _relabel_by_appearance(raw)
-        return clusters, np.clip(conf, 0, 1), int(len(np.unique(clusters))), fused
+        return clusters, np.clip(conf, 0, 1), int(len(np.unique(clusters)))
     clusters = _relabel_by_appearance(graph.partition(a, n_clusters, rs))
-    return clusters, _soft_confidence(fused, clusters), int(len(np.unique(clusters))), fused
+    return clusters, None, int(len(np.unique(clusters)))
 
 
 def _coordinates(a: np.ndarray, params: AnalysisParams) -> np.ndarray:
@@ -315,14 +321,13 @@ def _views(dicts, keeps, lines, n_dims):
     return views, names + ["line character"], np.asarray(kinds)
 
 
-def _choose_n_clusters(views, a, fusion: str, n: int) -> int:
-    """The number of clusters at the largest spectral gap (graph.choose_n_clusters), read on the
-    views' graphs with twice the style graph's edges (the default fusion; other fusions: their
-    own graph). A sparser graph splits its spectrum into more near-equal gaps: on the
+def _choose_n_clusters(a, n: int) -> int:
+    """The number of clusters at the largest spectral gap (graph.choose_n_clusters) of `a`: the
+    views' graphs at `graph.CHOICE_EDGES` nearest, fused (the default fusion; other fusions:
+    their own graph). A sparser graph splits its spectrum into more near-equal gaps: on the
     generalisation benchmark (17 collections, 3 seeds) the gap of the 20-edge style graph was
-    right on 17 of 51 runs, of a 40-edge one on 24, of the dense graph on 25."""
-    if fusion == "graph":
-        a = graph.fuse(_graphs(views, 2 * graph.N_EDGES))
+    right on 17 of 51 runs, of a 40-edge one on 24, of the dense graph on 25. Since the style
+    graph is the ladder of 5-40 nearest: 40 nearest 27 of 51, the ladder itself 15."""
     return graph.choose_n_clusters(a, _max_clusters(n))
 
 
@@ -477,16 +482,17 @@ def analyse(drawings: list[ShapeDrawings], params: AnalysisParams,
         t = time.perf_counter()
         prog.step("fuse", r, params.max_rounds)
         views, view_names, kinds = _views(dicts, keeps, lines, params.n_style_dims)
-        a, weights = _style_graph(views, params, y, fusion)
+        pick_k = y is None and n_clusters is None               # chosen once, in round 0
+        a, weights, a_choice = _style_graph(views, params, y, fusion, choice=pick_k)
         if weights is not None:               # one weight per kind of view, summed over dictionaries
             weights = np.bincount(kinds, weights, minlength=len(view_names))
         timings["fuse"] = timings.get("fuse", 0.0) + time.perf_counter() - t
 
         t = time.perf_counter()
         prog.step("cluster", r, params.max_rounds)
-        if y is None and n_clusters is None:                  # chosen once, in round 0
-            n_clusters = _choose_n_clusters(views, a, fusion, n)
-        clusters, conf, n_c, fused = _cluster(a, features, params, y, trip, n_clusters)
+        if pick_k:
+            n_clusters = _choose_n_clusters(a_choice, n)
+        clusters, conf, n_c = _cluster(a, features, params, y, trip, n_clusters)
         timings["cluster"] = timings.get("cluster", 0.0) + time.perf_counter() - t
 
         t = time.perf_counter()
@@ -508,6 +514,11 @@ def analyse(drawings: list[ShapeDrawings], params: AnalysisParams,
         seen.add(state)
         prev, keeps = clusters, [s.keep for s in sels]
 
+    t = time.perf_counter()
+    fused = _coordinates(a, params)
+    if conf is None:
+        conf = _soft_confidence(fused, clusters)
+    timings["cluster"] += time.perf_counter() - t
     # the result's words: the first dictionary's (drawn with the analysis seed)
     bank, sel = dicts[0].bank, sels[0]
     final = np.flatnonzero(sel.keep)

@@ -87,19 +87,24 @@ def test_view_graph_is_the_nearest_shapes_of_the_whole_distance_matrix():
 
 
 def test_a_views_graph_is_the_mean_of_its_nearest_graphs_at_every_scale():
-    """`ladder_affinity` takes every scale below N / 2 from one k-nearest search: the mean of
-    the graphs each scale's own search gives (duplicated rows: ties at some scales), whatever
-    the order of the shapes."""
+    """`ladder_affinities` takes every scale below N / 2, and the automatic k's graph, from one
+    k-nearest search: the graphs each scale's own search gives (duplicated rows: ties at some
+    scales), whatever the order of the shapes, whether or not the extra scale is a rung."""
     assert graph.edge_ladder(24) == [5, 10] and graph.edge_ladder(120) == [5, 10, 20, 40]
     assert graph.edge_ladder(8) == [5] and graph.edge_ladder(5000) == list(graph.EDGE_LADDER)
     x, _ = _blobs([60, 40, 30], seed=7)
     x = np.vstack([x, x[:12]])                            # duplicates: rows with ties
-    mean = graph.fuse([graph.affinity(x, n_edges=e) for e in graph.edge_ladder(len(x))])
-    a = graph.ladder_affinity(x)
-    assert (a != mean).nnz == 0
+    for rows in (x, x[:50], x[:24]):       # 40 nearest a rung, then not, then all N - 1
+        mean = graph.fuse([graph.affinity(rows, n_edges=e) for e in graph.edge_ladder(len(rows))])
+        a, (choice,) = graph.ladder_affinities(rows, [graph.CHOICE_EDGES])
+        assert (a != mean).nnz == 0
+        assert (choice != graph.affinity(rows, n_edges=graph.CHOICE_EDGES)).nnz == 0
+        assert (graph.ladder_affinities(rows)[0] != a).nnz == 0
     perm = np.random.default_rng(1).permutation(len(x))
-    np.testing.assert_array_equal(graph.ladder_affinity(x[perm]).toarray(),
-                                  a.toarray()[np.ix_(perm, perm)])
+    a, (choice,) = graph.ladder_affinities(x, [graph.CHOICE_EDGES])
+    a_p, (choice_p,) = graph.ladder_affinities(x[perm], [graph.CHOICE_EDGES])
+    np.testing.assert_array_equal(a_p.toarray(), a.toarray()[np.ix_(perm, perm)])
+    np.testing.assert_array_equal(choice_p.toarray(), choice.toarray()[np.ix_(perm, perm)])
 
 
 def test_large_graphs_are_solved_like_small_ones():
