@@ -32,8 +32,9 @@ back from .blend ARI 0.67 with k given (0.95 with 20), from OBJ with automatic k
 sample-120 from OBJ 0.82 (0.98); the ladder keeps them (README, "Generalisation"). Scales of
 80 and 160 as well (for N above 160 and 320) cost 3x per shape at 5,000 shapes and scored lower
 on hu2017-all (537 shapes, k given 0.427 against 0.435). The automatic k reads 40-nearest graphs
-(`pipeline._choose_n_clusters`; the ladder's graph instead: right on 15 of 51 runs, against 27). Only each shape's nearest are held, so memory grows with N, not
-N^2, and a view's graph costs the same per shape at any N but for the all-pairs search.
+(`pipeline._choose_n_clusters`; the ladder's graph instead: right on 15 of 51 runs, against
+27). Only each shape's nearest are held, so memory grows with N, not N^2, and a view's graph
+costs the same per shape at any N but for the all-pairs search.
 
 Order of the input: every step is equivariant to a permutation of the shapes (a neighbour tied
 with the last one kept is kept too) except k-means' initialisation, so k-means runs on the rows
