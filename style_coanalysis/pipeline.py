@@ -275,27 +275,29 @@ def _label_metric_graph(a: np.ndarray, features: np.ndarray, y: np.ndarray) -> n
 
 
 def _cluster(a, features, params, y, trip, n_clusters):
-    """(clusters, confidence, n_clusters) in the mode the constraints ask for, from the fused
-    style graph `a` (and, with labels, the shapes' style features). The unsupervised cut's
-    confidence is None here: it is read from the last round's spectral coordinates
-    (`_soft_confidence`), which only that round needs."""
+    """(clusters, confidence, n_clusters, spectral coordinates) in the mode the constraints ask
+    for, from the fused style graph `a` (and, with labels, the shapes' style features). Only
+    the triplet clustering reads the coordinates every round; the other modes return None for
+    them, and the unsupervised cut None for its confidence: both come from the last round's
+    coordinates (`_soft_confidence`), which only that round needs."""
     rs = params.random_state
     if y is not None:
         n_cls = int(y.max()) + 1
         clusters, dist = _label_transduction(a, features, y, n_cls)
         conf = dist[np.arange(a.shape[0]), clusters] / np.maximum(dist.sum(axis=1), 1e-12)
         conf[y >= 0] = 1.0
-        return clusters, np.clip(conf, 0, 1), n_cls
+        return clusters, np.clip(conf, 0, 1), n_cls, None
     if trip is not None:
         from .clustering import TripletClustering
         model_t = TripletClustering(n_clusters=n_clusters, random_state=rs)
-        raw = np.asarray(model_t.fit_predict(_coordinates(a, params), trip))
+        coords = _coordinates(a, params)
+        raw = np.asarray(model_t.fit_predict(coords, trip))
         memb = np.asarray(model_t.membership_, np.float64)
         conf = memb[np.arange(len(raw)), raw] / np.maximum(memb.sum(axis=1), 1e-12)
         clusters = _relabel_by_appearance(raw)
-        return clusters, np.clip(conf, 0, 1), int(len(np.unique(clusters)))
+        return clusters, np.clip(conf, 0, 1), int(len(np.unique(clusters))), coords
     clusters = _relabel_by_appearance(graph.partition(a, n_clusters, rs))
-    return clusters, None, int(len(np.unique(clusters)))
+    return clusters, None, int(len(np.unique(clusters))), None
 
 
 def _coordinates(a: np.ndarray, params: AnalysisParams) -> np.ndarray:
@@ -492,7 +494,7 @@ def analyse(drawings: list[ShapeDrawings], params: AnalysisParams,
         prog.step("cluster", r, params.max_rounds)
         if pick_k:
             n_clusters = _choose_n_clusters(a_choice, n)
-        clusters, conf, n_c = _cluster(a, features, params, y, trip, n_clusters)
+        clusters, conf, n_c, fused = _cluster(a, features, params, y, trip, n_clusters)
         timings["cluster"] = timings.get("cluster", 0.0) + time.perf_counter() - t
 
         t = time.perf_counter()
@@ -515,7 +517,8 @@ def analyse(drawings: list[ShapeDrawings], params: AnalysisParams,
         prev, keeps = clusters, [s.keep for s in sels]
 
     t = time.perf_counter()
-    fused = _coordinates(a, params)
+    if fused is None:
+        fused = _coordinates(a, params)
     if conf is None:
         conf = _soft_confidence(fused, clusters)
     timings["cluster"] += time.perf_counter() - t
