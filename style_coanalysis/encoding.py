@@ -87,8 +87,7 @@ def representatives(descriptors: np.ndarray, k: int, random_state: int = 0,
     n = len(x)
     if n == 0 or k <= 0:
         return np.zeros(0, np.int64)
-    n_distinct = len(np.unique(x.round(5), axis=0))
-    k = min(k, n_distinct)
+    k = distinct_rows(x, k)
     if k == n:
         return np.arange(n)
     # full k-means (one run): mini-batches are drawn by position, so one patch more or less
@@ -103,6 +102,18 @@ def representatives(descriptors: np.ndarray, k: int, random_state: int = 0,
         if len(members):
             chosen.append(members[np.argmin(d2[members])])
     return np.sort(np.asarray(chosen, np.int64))
+
+
+def distinct_rows(x: np.ndarray, limit: int) -> int:
+    """min(`limit`, number of distinct rows of `x` at 5 decimals), from the fewest leading rows
+    that settle it: a draw of 20,000 descriptors holds its 200 distinct words in the first few
+    hundred, and sorting all of them took a tenth of the dictionaries' time."""
+    m = min(len(x), 2 * limit)
+    while True:
+        found = len(np.unique(x[:m].round(5), axis=0))
+        if found >= limit or m == len(x):
+            return min(found, limit)
+        m = min(len(x), 2 * m)
 
 
 def plusplus_by_key(x: np.ndarray, keys: np.ndarray, k: int, random_state: int = 0) -> np.ndarray:

@@ -1,7 +1,7 @@
 """Convolutional encoding: a filter finds its own patch, 5 pooled values per filter."""
 import numpy as np
 
-from style_coanalysis.encoding import FilterBank, representatives, unit_rows
+from style_coanalysis.encoding import FilterBank, distinct_rows, representatives, unit_rows
 from style_coanalysis.paper_method import build_filter_bank, correlate_pooled, encode, view_features
 from style_coanalysis.features import hog_images, patch_descriptors
 
@@ -56,6 +56,19 @@ def test_cosine_ignores_ink_density():
     pooled = correlate_pooled(both, filt, (200, 200))
     assert np.isclose(pooled[0, 0, 0], pooled[1, 0, 0], atol=1e-3)
     assert pooled[2, 0, 0] < 0.8 * pooled[0, 0, 0]
+
+
+def test_distinct_rows_counts_up_to_the_limit_wherever_the_distinct_rows_are():
+    rng = np.random.default_rng(0)
+    words = rng.random((30, 4))
+    for lead in (0, 7, 100):                       # repeats of one row before the others
+        x = np.concatenate([np.repeat(words[:1], lead, axis=0), words[1:],
+                            words[rng.integers(0, 30, 50)]])
+        full = len(np.unique(x.round(5), axis=0))
+        assert full == 30
+        for limit in (1, 5, 29, 30, 31, 500):
+            assert distinct_rows(x, limit) == min(limit, full)
+    assert distinct_rows(np.zeros((0, 4)), 3) == 0
 
 
 def test_representatives_are_real_patches_one_per_centre():
