@@ -20,7 +20,9 @@ stable) but each stage is made to hold on collections it was not tuned on:
   redrawn by a 1e-7 change of coordinates moved it: issue 11, README);
 * the views are the word profile relative to structural look-alikes at every scale of a ladder,
   plus the line character (views.py), fused as graphs (graph.py): no neighbour count or
-  collection fraction is chosen for the collection at hand;
+  collection fraction is chosen for the collection at hand; the fusion is the views' mean or
+  their structure-free mean (each view weighed by how little of its graph the layout profiles
+  explain), whichever splits more clearly into the number of clusters;
 * the number of clusters comes from the fused graph's spectral gap, at most N/4;
 * labels start the graph's cut from the labelled shapes (seeded k-means), or, where
   leave-one-out says it predicts held-out labels better, decide which features matter first
@@ -241,11 +243,11 @@ def _clearer_cut(candidates: list, n_clusters: int):
     if n_clusters < 2 or len(candidates) == 1:
         return candidates[0]
     best, best_gap = candidates[0], -np.inf
-    for a, w in candidates:
-        vals, _ = graph.embedding(a, n_clusters + 1)
+    for pair in candidates:
+        vals, _ = graph.embedding(pair[0], n_clusters + 1)
         gap = float(vals[n_clusters - 1] - vals[n_clusters])
         if gap > best_gap:
-            best, best_gap = (a, w), gap
+            best, best_gap = pair, gap
     return best
 
 

@@ -272,3 +272,46 @@ def test_labels_place_the_centres_and_name_the_clusters_whatever_the_order():
     order = rng.permutation(60)
     again, _ = _label_transduction(graph.affinity(x[order]), x[order], y[order], 3)
     assert again.tolist() == classes[order].tolist()
+
+
+def _blocks(sizes, rng, noise=0.0):
+    """A graph of dense blocks of the given sizes plus weak random edges."""
+    n = sum(sizes)
+    a = noise * rng.random((n, n))
+    start = 0
+    for s in sizes:
+        a[start:start + s, start:start + s] += 1.0
+        start += s
+    a = (a + a.T) / 2
+    np.fill_diagonal(a, 0)
+    return a
+
+
+def test_structure_free_weights_discount_what_the_structure_graph_explains():
+    from scipy import sparse
+    from style_coanalysis.pipeline import structure_free_weights
+    rng = np.random.default_rng(0)
+    structure = _blocks([10, 10, 10], rng)
+    perm = rng.permutation(30)
+    other = structure[perm][:, perm]                  # the same groups, other shapes
+    graphs = [sparse.csr_matrix(structure), sparse.csr_matrix(3 * structure),
+              sparse.csr_matrix(other), sparse.csr_matrix(_blocks([30], rng))]
+    w = structure_free_weights(graphs, sparse.csr_matrix(structure))
+    assert w.sum() == pytest.approx(1.0)
+    assert w[0] == pytest.approx(w[1]) and w[0] < 1e-5    # the structure itself, at any scale
+    assert w[2] > w[3] > w[0]                             # unrelated groups count most
+    # a view's weight depends on its own graph and the structure only
+    w2 = structure_free_weights(graphs[2:], sparse.csr_matrix(structure))
+    assert w2[0] / w2[1] == pytest.approx(w[2] / w[3])
+
+
+def test_the_clearer_cut_is_the_graph_with_the_wider_gap_whatever_the_order():
+    from scipy import sparse
+    from style_coanalysis.pipeline import _clearer_cut
+    rng = np.random.default_rng(1)
+    clear = (sparse.csr_matrix(_blocks([12, 12], rng, noise=0.05)), "clear")
+    vague = (sparse.csr_matrix(_blocks([24], rng, noise=0.5)), "vague")
+    assert _clearer_cut([clear, vague], 2)[1] == "clear"
+    assert _clearer_cut([vague, clear], 2)[1] == "clear"
+    assert _clearer_cut([vague, vague], 2) is vague          # ties: the first
+    assert _clearer_cut([vague, clear], 1) is vague          # one cluster: nothing to compare
