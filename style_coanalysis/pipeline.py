@@ -20,9 +20,7 @@ stable) but each stage is made to hold on collections it was not tuned on:
   redrawn by a 1e-7 change of coordinates moved it: issue 11, README);
 * the views are the word profile relative to structural look-alikes at every scale of a ladder,
   plus the line character (views.py), fused as graphs (graph.py): no neighbour count or
-  collection fraction is chosen for the collection at hand; the fusion is the views' mean or
-  their structure-free mean (each view weighed by how little of its graph the layout profiles
-  explain), whichever splits more clearly into the number of clusters;
+  collection fraction is chosen for the collection at hand;
 * the number of clusters comes from the fused graph's spectral gap, at most N/4;
 * labels start the graph's cut from the labelled shapes (seeded k-means), or, where
   leave-one-out says it predicts held-out labels better, decide which features matter first
@@ -42,7 +40,6 @@ import time
 from dataclasses import dataclass, field
 
 import numpy as np
-from scipy import sparse
 from scipy.optimize import linear_sum_assignment
 from sklearn.cluster import KMeans
 from sklearn.preprocessing import normalize
@@ -177,25 +174,19 @@ def _graphs(views, choice: bool = False) -> tuple[list, list | None]:
         [made[id(v)][1][0] for v in views] if choice else None
 
 
-def _style_graph(views, params, y, fusion, choice: bool = False, structure=None):
-    """The fused style graph (N, N), the weight of each view in it, with `choice` the graph the
-    automatic k reads (`_choose_n_clusters`; None without), and, given the `structure` graph
-    (the layout profiles'), the structure-free fusion as a (graph, weights) pair (else None).
+def _style_graph(views, params, y, fusion, choice: bool = False):
+    """The fused style graph (N, N), the weight of each view in it, and, with `choice`, the
+    graph the automatic k reads (`_choose_n_clusters`; None without).
 
-    fusion "graph" (default): the mean of the views' graphs, and the structure-free mean
-    (`structure_free_weights`); `_clearer_cut` keeps one of the two. The other fusions fuse
-    the views' features first and build one graph of the result, for comparison: "pslf"
-    (paper 4.3, its learned view weights; the views shifted to be non-negative), "concat",
-    "pca", "cca"; the automatic k reads that graph."""
+    fusion "graph" (default): the mean of the views' graphs. The other fusions fuse the views'
+    features first and build one graph of the result, for comparison: "pslf" (paper 4.3, its
+    learned view weights; the views shifted to be non-negative), "concat", "pca", "cca"; the
+    automatic k reads that graph."""
     if fusion == "graph":
         graphs, choice_graphs = _graphs(views, choice)
         weights = np.full(len(views), 1.0 / len(views))
-        free = None
-        if structure is not None:
-            w_free = structure_free_weights(graphs, structure)
-            free = (graph.fuse(graphs, w_free), w_free)
         return graph.fuse(graphs, weights), weights, \
-            graph.fuse(choice_graphs) if choice else None, free
+            graph.fuse(choice_graphs) if choice else None
     shifted = [v - v.min(axis=0) for v in views]
     if fusion == "pslf":
         from .pslf import PSLF
@@ -203,52 +194,11 @@ def _style_graph(views, params, y, fusion, choice: bool = False, structure=None)
                      beta=params.beta, gamma=params.gamma, random_state=params.random_state,
                      scaling="none")
         fused = graph.affinity(model.fit_transform(shifted, y=y))
-        return fused, np.asarray(model.view_weights_), fused if choice else None, None
+        return fused, np.asarray(model.view_weights_), fused if choice else None
     from . import fusion as fusion_mod
     cls = {"concat": "ConcatFusion", "pca": "PCAFusion", "cca": "CCAFusion"}[fusion]
     fused = graph.affinity(np.asarray(getattr(fusion_mod, cls)().fit_transform(shifted)))
-    return fused, None, fused if choice else None, None
-
-
-def structure_free_weights(graphs: list, structure) -> np.ndarray:
-    """Each view's weight: 1 - its graph's cosine with the `structure` graph (both as vectors of
-    edge weights), normalised to sum 1: a view counts by the share of its graph the layout
-    profiles do not explain.
-
-    Why: a word view relative to many look-alikes (the ladder's top rungs) is close to the raw
-    word profile, whose nearest shapes are mostly of the same category; relative to a few it
-    keeps what varies among structural look-alikes. On collection2-styles-2 (seed 0) the
-    nearest 5 shapes of the top rung's graph share a category 75% of the time and a style 62%;
-    of the finest rung's, 23% (chance 20%) and 71%. Measured by this cosine, the top rungs sit
-    at 0.8-0.9 and the finest at 0.3-0.4 on every collection of the benchmark."""
-    s = sparse.csr_matrix(structure)
-    s_norm = np.sqrt(s.multiply(s).sum())
-    cos = np.array([float(sparse.csr_matrix(g).multiply(s).sum()) /
-                    max(float(np.sqrt(sparse.csr_matrix(g).multiply(g).sum()) * s_norm), 1e-12)
-                    for g in graphs])
-    w = np.clip(1.0 - cos, 1e-6, None)
-    return w / w.sum()
-
-
-def _clearer_cut(candidates: list, n_clusters: int):
-    """Of (graph, weights) pairs, the first whose normalised affinity has the widest gap after
-    its `n_clusters`-th eigenvalue: the graph that splits most clearly into that many groups.
-
-    Why a choice and not always the structure-free fusion: where the layout itself differs
-    with style (one category, or the real voxel furniture), that fusion weighs style down.
-    Measured with k given (generalisation benchmark collections, 3 seeds; bench notes):
-    always structure-free, sample-styles-4 0.58 -> 0.88 and sample-cats-5 0.67 -> 0.92, but
-    hu2017-60-1 0.57 -> 0.52 and -60-2 0.69 -> 0.63; chosen by the gap, the hu2017 subsets
-    keep the uniform mean and sample-styles-4 still gains (0.88)."""
-    if n_clusters < 2 or len(candidates) == 1:
-        return candidates[0]
-    best, best_gap = candidates[0], -np.inf
-    for pair in candidates:
-        vals, _ = graph.embedding(pair[0], n_clusters + 1)
-        gap = float(vals[n_clusters - 1] - vals[n_clusters])
-        if gap > best_gap:
-            best, best_gap = pair, gap
-    return best
+    return fused, None, fused if choice else None
 
 
 def _label_transduction(a: np.ndarray, features: np.ndarray, y: np.ndarray, n_classes: int):
@@ -406,7 +356,6 @@ class Encoding:
 
     dictionaries: list[Dictionary]
     lines: np.ndarray            # (N, L) line character
-    layout: np.ndarray           # (N, K') the first dictionary's layout profile (48 px words)
     timings: dict = field(default_factory=dict)
 
 
@@ -484,15 +433,14 @@ def encode(drawings, params: AnalysisParams, maps=None, progress=None) -> Encodi
     # averaged over the ladder's scales
     ks = neighbour_ladder(n)
     k_far = max([k for k in ks if k < n - 1], default=0)
-    dictionaries, layouts = [], []
+    dictionaries = []
     for (bank, _), (c, lc) in zip(banks, counts):
         words = frequency_features(c[:, None])
-        layouts.append(frequency_features(lc[:, None]))
-        neighbours = look_alikes(layouts[-1], k_far)                   # by layout profile
+        neighbours = look_alikes(frequency_features(lc[:, None]), k_far)   # by layout profile
         rungs = structure_relative(words, neighbours, ks)
         dictionaries.append(Dictionary(bank, rungs, np.mean(rungs, axis=0)))
     timings["encode"] = time.perf_counter() - t
-    return Encoding(dictionaries, np.stack(lines), layouts[0], timings)
+    return Encoding(dictionaries, np.stack(lines), timings)
 
 
 def analyse(drawings: list[ShapeDrawings], params: AnalysisParams,
@@ -529,9 +477,6 @@ def analyse(drawings: list[ShapeDrawings], params: AnalysisParams,
         features = np.hstack([dicts[0].relative, lines])
         features = (features - features.mean(axis=0)) / (features.std(axis=0) + 1e-9)
 
-    # the layout profiles' graph: what the structure-free fusion discounts (_style_graph)
-    structure = graph.ladder_affinities(style_space(encoded.layout, params.n_style_dims))[0] \
-        if fusion == "graph" else None
     keeps = [np.ones(len(d.bank), bool) for d in dicts]
     prev = None
     rounds, seen = [], set()
@@ -540,19 +485,15 @@ def analyse(drawings: list[ShapeDrawings], params: AnalysisParams,
         prog.step("fuse", r, params.max_rounds)
         views, view_names, kinds = _views(dicts, keeps, lines, params.n_style_dims)
         pick_k = y is None and n_clusters is None               # chosen once, in round 0
-        a, weights, a_choice, free = _style_graph(views, params, y, fusion, choice=pick_k,
-                                                  structure=structure)
-        if pick_k:
-            n_clusters = _choose_n_clusters(a_choice, n)
-        if free is not None:
-            a, weights = _clearer_cut([(a, weights), free],
-                                      int(y.max()) + 1 if y is not None else n_clusters)
+        a, weights, a_choice = _style_graph(views, params, y, fusion, choice=pick_k)
         if weights is not None:               # one weight per kind of view, summed over dictionaries
             weights = np.bincount(kinds, weights, minlength=len(view_names))
         timings["fuse"] = timings.get("fuse", 0.0) + time.perf_counter() - t
 
         t = time.perf_counter()
         prog.step("cluster", r, params.max_rounds)
+        if pick_k:
+            n_clusters = _choose_n_clusters(a_choice, n)
         clusters, conf, n_c, fused = _cluster(a, features, params, y, trip, n_clusters)
         timings["cluster"] = timings.get("cluster", 0.0) + time.perf_counter() - t
 
