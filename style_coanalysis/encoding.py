@@ -106,8 +106,9 @@ def representatives(descriptors: np.ndarray, k: int, random_state: int = 0,
 
 def distinct_rows(x: np.ndarray, limit: int) -> int:
     """min(`limit`, number of distinct rows of `x` at 5 decimals), from the fewest leading rows
-    that settle it: a draw of 20,000 descriptors holds its 200 distinct words in the first few
-    hundred, and sorting all of them took a tenth of the dictionaries' time."""
+    that settle it (twice `limit`, doubled while too few are distinct): a draw of 20,000
+    descriptors has 200 distinct ones among its first 400, and sorting all 20,000 took a tenth
+    of the dictionaries' time at 1,050 shapes."""
     m = min(len(x), 2 * limit)
     while True:
         found = len(np.unique(x[:m].round(5), axis=0))
