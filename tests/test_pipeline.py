@@ -191,12 +191,18 @@ def test_look_alike_means_match_a_direct_computation_across_row_blocks():
         np.testing.assert_allclose(whole[:, keep], kept, rtol=0, atol=1e-12)
 
 
-def test_the_neighbour_ladder_spans_the_collection():
-    from style_coanalysis.views import MIN_NEIGHBOURS, neighbour_ladder
-    for n in (6, 24, 120, 537):
+def test_the_neighbour_ladder_spans_the_same_fractions_of_every_collection():
+    """The ladder halves from the whole collection: down to a handful of look-alikes in a
+    small collection, down to N/16 in a large one, so a larger collection of the same make-up
+    gets the same views rather than more rungs of near copies."""
+    from style_coanalysis.views import LADDER_RUNGS, MIN_NEIGHBOURS, neighbour_ladder
+    for n in (2, 6, 24, 120, 537, 5000):
         ks = neighbour_ladder(n)
         assert ks[0] == n - 1 and all(a > b for a, b in zip(ks, ks[1:]))
-        assert min(ks) >= min(MIN_NEIGHBOURS, n - 1) and min(ks) < 2 * MIN_NEIGHBOURS
+        assert min(ks) >= min(MIN_NEIGHBOURS, n - 1) and len(ks) <= LADDER_RUNGS
+        assert min(ks) < 2 * MIN_NEIGHBOURS or len(ks) == LADDER_RUNGS
+    assert neighbour_ladder(5000)[-1] == round(4999 / 2 ** (LADDER_RUNGS - 1))
+    assert neighbour_ladder(120) == [119, 60, 30, 15, 7]
 
 
 def test_encoding_reads_the_shapes_one_at_a_time(collection):
