@@ -31,7 +31,8 @@ automatic k 11.13 and 11.11 against 11.05, 2 labels 12.67 and 12.65 against 12.4
 back from .blend ARI 0.67 with k given (0.95 with 20), from OBJ with automatic k 0.69 (0.87),
 sample-120 from OBJ 0.82 (0.98); the ladder keeps them (README, "Generalisation"). Scales of
 80 and 160 as well (for N above 160 and 320) cost 3x per shape at 5,000 shapes and scored lower
-on hu2017-all (537 shapes, k given 0.427 against 0.435). The automatic k reads 40-nearest graphs
+on hu2017-all (537 shapes, k given 0.427 against 0.435, with the eight-rung look-alike ladder
+of then). The automatic k reads 40-nearest graphs
 (`pipeline._choose_n_clusters`; the ladder's graph instead: right on 15 of 51 runs, against
 27). Only each shape's nearest are held, so memory grows with N, not N^2, and a view's graph
 costs the same per shape at any N but for the all-pairs search.
