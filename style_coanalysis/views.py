@@ -21,7 +21,7 @@ reached style purity 0.48 / 0.54 / 0.61 / 0.47 at 536 / 268 / 134 / 67 look-alik
 line statistics' 0.46. The five top rungs (3 seeds, the benchmark's encodings): k given
 0.435 -> 0.580, 2 labels 0.437 -> 0.590, automatic k 0.395 -> 0.457. sample-240, whose
 ladder loses its rung of 7: 0.965 / 0.967 / 0.746 -> 0.961 / 0.963 / 0.746. Four rungs (to
-N/8) also fixed hu2017-all's automatic k (0.583, 4 clusters) but lost 0.02 on sample-240 and
+N/8) also fixed hu2017-all's automatic k (0.583, 4 clusters) but lost 0.01-0.03 on sample-240 and
 collection2 with k given and 2 labels. Collections of at most 128 shapes had at most five rungs
 already: their views are unchanged.
 The ladder's smallest rung (MIN_NEIGHBOURS = 4), measured with k given on seven benchmark
