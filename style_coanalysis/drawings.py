@@ -27,7 +27,6 @@ class ShapeDrawings:
     seed_faces: np.ndarray       # (S,) int32 triangle each seed lies on
     seed_visible: np.ndarray     # (V, S) bool, seed seen by camera v (occlusion tested)
     seed_pixels: np.ndarray      # (V, S, 2) float32 projected (x, y)
-    vertex_visible: np.ndarray   # (V, N) bool, mesh vertex seen by camera v (for back-projection)
 
     @property
     def n_views(self) -> int:
@@ -39,6 +38,8 @@ class ShapeDrawings:
 
     @classmethod
     def from_arrays(cls, arrays) -> "ShapeDrawings":
+        """The fields' arrays; others are ignored (entries cached before 2026-12 also hold each
+        vertex's visibility, which nothing read)."""
         data = {k: np.asarray(arrays[k]) for k in cls.__dataclass_fields__}
         data["name"] = str(data["name"])
         return cls(**data)

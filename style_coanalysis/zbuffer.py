@@ -1,10 +1,9 @@
 """The fast drawing path: feature lines and visibility from one depth buffer per view, in numpy.
 
-Why: Freestyle spends seconds a shape finding which edges are visible, and the ray-cast
-visibility of seeds and vertices (one BVH query per point and camera) costs as much again. Here
-each view is rasterised once into a depth buffer holding, per pixel, the nearest surface's depth
-and triangle; every visibility question of that view (line samples, seeds, vertices) is then a
-vectorised lookup in it. No render engine, no Blender: the same function runs anywhere.
+Why: Freestyle spends seconds a shape finding which edges are visible, and the other renderers
+test each seed with a BVH query per camera. Here each view is rasterised once into a depth
+buffer holding, per pixel, the nearest surface's depth and triangle; every visibility question
+of that view (line samples, seeds) is then a vectorised lookup in it. No render engine, no Blender: the same function runs anywhere.
 
 Lines are the ones Freestyle draws with this extension's settings (`render._setup_freestyle`):
 - silhouettes: edges between a face turned towards the camera and one turned away (face normals,
@@ -16,8 +15,8 @@ No suggestive contours (their definition needs curvature; Freestyle draws them).
 
 Visibility: a line sample is seen when one of the 4 pixel centres around it holds nothing, a
 surface no nearer than the sample less about one pixel's worth of depth (`TOL_PX`), or a face of
-its edge (`seen_in_buffer`); seeds and vertices get the ray cast of the other renderers, with the
-buffer's triangles as the candidate occluders (`ray_visible`).
+its edge (`seen_in_buffer`); seeds get the ray cast of the other renderers, with the buffer's
+triangles as the candidate occluders (`ray_visible`).
 """
 from __future__ import annotations
 
@@ -162,16 +161,16 @@ def seen_in_buffer(zbuf: np.ndarray, tri_id: np.ndarray, pixels: np.ndarray, dep
 
 
 def ray_visible(zbuf: np.ndarray, tri_id: np.ndarray, pixels: np.ndarray, points: np.ndarray,
-                depth: np.ndarray, own, camera: np.ndarray, triangles, neighbours: np.ndarray,
-                focal_px: float) -> np.ndarray:
-    """(n,) bool for seeds and vertices: `render.ray_visibility`'s ray cast, vectorised, with
-    the depth buffer in place of a BVH.
+                depth: np.ndarray, own_face: np.ndarray, camera: np.ndarray, triangles,
+                neighbours: np.ndarray, focal_px: float) -> np.ndarray:
+    """(n,) bool for surface points (seeds): `render.ray_visibility`'s ray cast, vectorised,
+    with the depth buffer in place of a BVH.
 
     The buffer proposes the occluders: the triangles nearest the camera at the 4 pixel centres
     around the point's projection, and their edge neighbours (the surface along the exact ray
     may be a neighbour's). A point is hidden when the segment from the camera to it crosses
     one of them short of the point by more than `TOL_PX` pixels' worth of depth. Only points
-    with a nearer surface (not one they lie on, `own(tri_ids, rows) -> bool`) at some but not
+    with a nearer surface (not the face they lie on, `own_face`) at some but not
     all of the 4 pixel centres are tested exactly: with none they are seen, with nearer
     surfaces all around they are hidden. `triangles`: (first corner, first edge, second edge)
     per face, each (M, 3).
@@ -181,7 +180,7 @@ def ray_visible(zbuf: np.ndarray, tri_id: np.ndarray, pixels: np.ndarray, points
     slack = depth * (1.0 - TOL_PX / focal_px)
     nearer = (t >= 0) & (z < slack[:, None])
     r, k = np.nonzero(nearer)
-    mine = own(t[r, k], r)
+    mine = t[r, k] == own_face[r]
     nearer[r[mine], k[mine]] = False
     seen = inside & ~nearer.all(axis=1)         # covered all around by nearer surfaces: hidden
     doubt = np.flatnonzero(seen & nearer.any(axis=1))
@@ -299,25 +298,14 @@ class ShapeBuffers:
         """(M,) bool: is each face turned towards camera v?"""
         return np.einsum("ij,ij->i", self.normals, self.locations[v] - self.centres) > 0
 
-    def points_visible(self, points: np.ndarray, own_face: np.ndarray | None = None,
-                       vertex_ids: np.ndarray | None = None) -> np.ndarray:
-        """(V, n) bool for surface points lying on `own_face` (seeds) or for mesh vertices
-        (`vertex_ids`: their indices, so the triangles using them count as their own)."""
+    def points_visible(self, points: np.ndarray, own_face: np.ndarray) -> np.ndarray:
+        """(V, n) bool for surface points lying on the faces `own_face` (seeds)."""
         points = np.asarray(points, np.float64).reshape(-1, 3)
-        if own_face is not None:
-            own_face = np.asarray(own_face)
-
-            def own(t, idx):
-                return t == own_face[idx]
-        else:
-            faces = self.faces
-
-            def own(t, idx):
-                return (faces[t] == vertex_ids[idx][:, None]).any(axis=1)
+        own_face = np.asarray(own_face)
         out = np.zeros((len(self.cameras), len(points)), bool)
         for v in range(len(self.cameras)):
             pix, depth = project(self.cameras[v:v + 1], points)
-            out[v] = ray_visible(*self.buffers[v], pix[0], points, depth[0], own,
+            out[v] = ray_visible(*self.buffers[v], pix[0], points, depth[0], own_face,
                                  self.locations[v], self.triangles, self.neighbours,
                                  self.focal_px)
         return out

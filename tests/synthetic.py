@@ -77,8 +77,7 @@ def make_shape(name: str, style: int, category: int, rng, n_views: int = 6, size
     return ShapeDrawings(
         name=name, images=images, cameras=np.zeros((n_views, 3, 4)),
         seeds=rng.standard_normal((n_seeds, 3)).astype(np.float32),
-        seed_faces=np.zeros(n_seeds, np.int32), seed_visible=visible, seed_pixels=pixels,
-        vertex_visible=np.ones((n_views, 8), bool))
+        seed_faces=np.zeros(n_seeds, np.int32), seed_visible=visible, seed_pixels=pixels)
 
 
 def make_collection(n_per_cell: int = 4, n_views: int = 6, seed: int = 0):

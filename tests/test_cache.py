@@ -18,8 +18,7 @@ def fake_drawings(mesh, rng):
     return ShapeDrawings(mesh.name, rng.random((12, 20, 20)).astype(np.float32),
                          rng.random((12, 3, 4)), rng.random((5, 3)).astype(np.float32),
                          np.arange(5, dtype=np.int32), rng.random((12, 5)) > 0.5,
-                         rng.random((12, 5, 2)).astype(np.float32),
-                         rng.random((12, len(mesh.vertices))) > 0.5)
+                         rng.random((12, 5, 2)).astype(np.float32))
 
 
 class Counter:
@@ -45,6 +44,19 @@ def test_second_lookup_hits_and_round_trips(tmp_path):
     assert cached and renamed.name == "other"
     files = [p for p in tmp_path.rglob("*") if p.is_file()]
     assert files and all(p.suffix == ".npz" and not p.name.startswith(".") for p in files)  # no temporaries
+
+
+def test_entry_with_the_former_vertex_visibility_still_loads(tmp_path):
+    """Entries written before the drawings stopped holding each vertex's visibility (nothing
+    read it) are served as they are: the user's cache is not rendered again."""
+    cache, mesh, s = DrawingCache(tmp_path), tetra(), DrawingSettings()
+    d = fake_drawings(mesh, np.random.default_rng(1))
+    key = cache_key(mesh, s)
+    cache.store_arrays(key, d.to_arrays() | {"vertex_visible": np.ones((12, 4), bool)})
+    again, cached = cache.get_or_compute(mesh, s, Counter(mesh))
+    assert cached
+    for k, v in d.to_arrays().items():
+        assert np.array_equal(v, again.to_arrays()[k]), k
 
 
 def test_moved_vertex_or_other_settings_miss(tmp_path):
@@ -129,7 +141,9 @@ def test_collection_in_worker_processes_matches_in_process(tmp_path):
     assert not skipped and [d.name for d in par] == ["a", "b"]
     for p, q in zip(par, seq):
         assert np.array_equal(p.images, q.images) and np.array_equal(p.seed_visible, q.seed_visible)
-    assert normalise(shapes[0]).vertices.shape[0] == par[0].vertex_visible.shape[1]
+        assert np.array_equal(p.seeds, q.seeds)
+    # the seeds lie on the normalised mesh's faces
+    assert par[0].seed_faces.max() < len(normalise(shapes[0]).faces)
 
 
 def test_ctrl_c_while_writing_leaves_nothing_and_reports_nothing(tmp_path, monkeypatch):

@@ -85,7 +85,7 @@ def _plate_and_drawings():
         rr, cc = line(int(by), int(bx) - 30, int(by), int(bx) + 30)
         images[v, rr, cc] = 1
     d = ShapeDrawings("s", images, cams, verts[:2], np.zeros(2, np.int32), np.ones((12, 2), bool),
-                      np.zeros((12, 2, 2), np.float32), np.ones((12, len(verts)), bool))
+                      np.zeros((12, 2, 2), np.float32))
     return d, verts, faces, centres, len(fine_f)
 
 

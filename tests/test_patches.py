@@ -59,7 +59,7 @@ def drawing_with(images, pixels, visible):
     v, s = visible.shape
     return ShapeDrawings("d", images.astype(np.float32), np.zeros((v, 3, 4)),
                          np.zeros((s, 3), np.float32), np.zeros(s, np.int32), visible,
-                         pixels.astype(np.float32), np.zeros((v, 1), bool))
+                         pixels.astype(np.float32))
 
 
 def test_extract_keeps_visible_inked_windows_only():

@@ -155,7 +155,7 @@ def test_far_side_seed_is_invisible():
     assert vis[6].tolist() == [False, True]        # camera 6 sits on the -x side
 
 
-@pytest.mark.parametrize("renderer", ["freestyle", "zbuffer"])
+@pytest.mark.parametrize("renderer", RENDERERS)
 def test_seed_visibility_matches_facing_on_cube(drawn, renderer):
     """On a convex shape a surface point is visible exactly when its face faces the camera
     (up to the one-pixel depth slack: points within ~a pixel of a cube edge may go either way)."""
@@ -175,23 +175,11 @@ def test_seed_visibility_matches_facing_on_cube(drawn, renderer):
     assert np.allclose(d.seed_pixels, pix, atol=1e-3) and (depth > 0).all()
 
 
-@pytest.mark.parametrize("renderer", ["lineart", "zbuffer"])
-def test_vertex_visibility_matches_facing_on_cube(drawn, renderer):
-    mesh, d = drawn["cube", renderer]
-    normals = face_normals(mesh)
-    cams = Rig().locations()
-    for v in range(12):
-        facing_faces = np.einsum("fk,fk->f", cams[v] - mesh.vertices[mesh.faces[:, 0]], normals) > 1e-6
-        expected = np.zeros(len(mesh.vertices), bool)
-        expected[np.unique(mesh.faces[facing_faces])] = True
-        assert np.array_equal(d.vertex_visible[v], expected), v
-
-
 def test_same_input_same_output(drawn):
     from style_coanalysis.blender.render import draw_shape
     mesh, first = drawn["step", "freestyle"]
     again = draw_shape(mesh, DrawingSettings(renderer="freestyle"))
-    for field in ("images", "seeds", "seed_faces", "seed_visible", "seed_pixels", "vertex_visible"):
+    for field in ("images", "seeds", "seed_faces", "seed_visible", "seed_pixels"):
         assert np.array_equal(getattr(first, field), getattr(again, field)), field
     other = draw_shape(mesh, DrawingSettings(renderer="lineart", seed=1))
     assert not np.array_equal(other.seeds, first.seeds)
@@ -217,11 +205,22 @@ def test_renderers_agree(drawn, shape, other):
 
 @pytest.mark.parametrize("shape", list(SHAPES))
 def test_zbuffer_visibility_is_the_ray_casts(drawn, shape):
-    """The depth buffers' vertex visibility against a BVH ray cast per vertex and camera."""
+    """The depth buffers' visibility of surface points against a BVH ray cast per point and
+    camera, on 2,000 points spread over the faces (the seeds' test)."""
     from style_coanalysis.blender.render import _bvh, ray_visibility
-    mesh, d = drawn[shape, "zbuffer"]
-    rays = ray_visibility(_bvh(mesh), Rig(), mesh.vertices, faces=mesh.faces)
-    assert np.array_equal(d.vertex_visible, rays)
+    from style_coanalysis.zbuffer import ShapeBuffers
+    mesh, _ = drawn[shape, "zbuffer"]
+    rng = np.random.default_rng(0)
+    faces = rng.integers(0, len(mesh.faces), 2000)
+    w = rng.dirichlet(np.ones(3), 2000)
+    points = np.einsum("nk,nkd->nd", w, mesh.vertices[mesh.faces[faces]].astype(float))
+    rig = Rig()
+    buffers = ShapeBuffers(mesh.vertices, mesh.faces, rig.matrices(), rig.locations(), 200,
+                           rig.focal_px)
+    seen = buffers.points_visible(points, own_face=faces)
+    rays = ray_visibility(_bvh(mesh), rig, points, own_face=faces)
+    assert 0.2 < rays.mean() < 0.8
+    assert np.array_equal(seen, rays), (seen != rays).sum()
 
 
 def test_zbuffer_open_surface_seen_from_behind():
@@ -234,7 +233,7 @@ def test_zbuffer_open_surface_seen_from_behind():
     a = draw_shape(up, DrawingSettings(renderer="zbuffer"))
     b = draw_shape(down, DrawingSettings(renderer="zbuffer"))
     assert a.images.sum() > 0 and np.array_equal(a.images, b.images)
-    assert np.array_equal(a.vertex_visible, b.vertex_visible) and a.vertex_visible.all()
+    assert a.seed_visible.all() and np.array_equal(a.seed_visible, b.seed_visible)
 
 
 def test_zbuffer_refuses_suggestive_contours():

@@ -245,8 +245,7 @@ def analysed(labels=None):
         px = rng.uniform(12, 52, (2, 6, 2)).astype(np.float32)
         shapes.append(ShapeDrawings(f"s{i}", imgs, rng.random((2, 3, 4)),
                                     rng.random((6, 3)).astype(np.float32),
-                                    np.arange(6, dtype=np.int32), np.ones((2, 6), bool), px,
-                                    np.ones((2, 5), bool)))
+                                    np.arange(6, dtype=np.int32), np.ones((2, 6), bool), px))
     params = build_options(clusters=2, rounds=2).params
     return shapes, params, pipeline.analyse(shapes, params, labels=labels)
 

@@ -1,8 +1,8 @@
 """Line drawings of one normalised mesh from the paper's 12 cameras (section 3), plus seeds.
 
 `draw_shape(mesh, settings)` builds a temporary scene (never the user's), renders every view with
-the chosen renderer, tests seed and vertex visibility by ray casting, removes everything it made
-and returns a `ShapeDrawings` (the "zbuffer" renderer makes no scene and casts no BVH ray):
+the chosen renderer, tests seed visibility by ray casting, removes everything it made and
+returns a `ShapeDrawings` (the "zbuffer" renderer makes no scene and casts no BVH ray):
 
 - "freestyle" (faithful): Cycles on the CPU, 1 sample, only the strokes (a Holdout material
   override and a transparent film: the PNG's alpha is the ink). Silhouettes, borders, dihedral
@@ -12,8 +12,8 @@ and returns a `ShapeDrawings` (the "zbuffer" renderer makes no scene and casts n
   with the rig and rasterised as 1-pixel polylines. No render engine; no suggestive contours.
 
 - "zbuffer" (fastest): no Blender at all (`zbuffer.ShapeBuffers`): one depth buffer per view
-  rasterised in numpy; the same silhouettes, borders and creases as Freestyle, and seeds and
-  vertex visibility, are lookups in it. No suggestive contours.
+  rasterised in numpy; the same silhouettes, borders and creases as Freestyle, and the seeds'
+  visibility, are lookups in it. No suggestive contours.
 
 Cameras match `rig.Rig` exactly (location, orientation, horizontal field of view), so the rig's
 matrices describe the Blender renders to within a pixel (tested with `world_to_camera_view`).
@@ -376,21 +376,17 @@ def _bvh(mesh: Mesh) -> BVHTree:
     return BVHTree.FromPolygons(mesh.vertices.tolist(), mesh.faces.tolist(), all_triangles=True)
 
 
-def ray_visibility(tree: BVHTree, rig: Rig, points: np.ndarray,
-                   own_face=None, faces: np.ndarray | None = None, views=None,
-                   first_index: int = 0) -> np.ndarray:
+def ray_visibility(tree: BVHTree, rig: Rig, points: np.ndarray, own_face=None) -> np.ndarray:
     """(V, N) bool: is each point the first thing each camera's ray to it meets?
 
     A ray from the camera centre to the point counts it visible when it hits nothing (grazing
     rays can slip past the point's own edge), hits at least the point's depth minus about one
     pixel's worth of depth (`VISIBILITY_TOL_PX`; tighter loses points on their own triangles to
-    floating-point error), or hits a triangle the point lies on (`own_face` index per point, or
-    for vertices the triangles in `faces` that use them).
+    floating-point error), or hits the triangle the point lies on (`own_face`, one index per
+    point).
     """
     points = np.asarray(points, np.float64).reshape(-1, 3)
     locs = rig.locations()
-    if views is not None:
-        locs = [locs[v] for v in views]
     vis = np.zeros((len(locs), len(points)), bool)
     if len(points) == 0:
         return vis
@@ -410,18 +406,11 @@ def ray_visibility(tree: BVHTree, rig: Rig, points: np.ndarray,
         ok = hit_d >= dist - tol
         if own_face is not None:
             ok |= hit_f == np.asarray(own_face)
-        elif faces is not None:
-            hf = np.where(hit_f >= 0, hit_f, 0)
-            own = np.arange(first_index, first_index + len(points))[:, None]
-            ok |= (hit_f >= 0) & (faces[hf] == own).any(axis=1)
         vis[v] = ok
     return vis
 
 
 # ---------------------------------------------------------------- entry point
-VISIBILITY_CHUNK = 20000    # ray casts per step: well under half a second here
-
-
 def draw_lines(mesh: Mesh, settings: DrawingSettings, threads: int = 0) -> np.ndarray:
     """The (V, H, W) ink images alone, with the chosen renderer (no seeds, no visibility)."""
     rig = rig_for(settings)
@@ -451,16 +440,12 @@ def _zbuffer_steps(mesh: Mesh, settings: DrawingSettings, rig: Rig):
     seeds, seed_faces = sample_seeds(mesh, settings.n_seeds, settings.seed, keep=seen_somewhere)
     seed_visible = buffers.points_visible(seeds, own_face=seed_faces)
     yield "seeds"
-    vertex_visible = buffers.points_visible(mesh.vertices,
-                                            vertex_ids=np.arange(len(mesh.vertices)))
-    yield "visibility"
     images = buffers.lines(settings.crease_angle_deg)
     seed_pixels, _ = project(rig.matrices(), seeds)
     yield f"views {rig.n_views}/{rig.n_views}"
     return ShapeDrawings(
         name=mesh.name, images=images, cameras=rig.matrices(), seeds=seeds, seed_faces=seed_faces,
-        seed_visible=seed_visible, seed_pixels=seed_pixels.astype(np.float32),
-        vertex_visible=vertex_visible)
+        seed_visible=seed_visible, seed_pixels=seed_pixels.astype(np.float32))
 
 
 def draw_shape(mesh: Mesh, settings: DrawingSettings, threads: int = 0) -> ShapeDrawings:
@@ -475,11 +460,11 @@ def draw_shape(mesh: Mesh, settings: DrawingSettings, threads: int = 0) -> Shape
 def draw_shape_steps(mesh: Mesh, settings: DrawingSettings, threads: int = 0):
     """`draw_shape` as a generator of short steps, for Blender's main thread.
 
-    Yields a short description of the step just done ("view 3/12", "visibility 2/12");
-    returns the ShapeDrawings. Each step is one rendered view, one Line Art evaluation (all
-    views at once, it is fast) or at most VISIBILITY_CHUNK ray casts, so a caller that runs
-    one step per UI event never blocks the interface for long. Closing the generator removes
-    the temporary scene.
+    Yields a short description of the step just done ("seeds", "view 3/12"); returns the
+    ShapeDrawings. Each step is the seeds (a few hundred ray casts), one rendered view or one
+    Line Art evaluation (all views at once, it is fast), so a caller that runs one step per UI
+    event never blocks the interface for long. Closing the generator removes the temporary
+    scene.
     """
     if settings.renderer not in RENDERERS:
         raise InputError(f"unknown renderer '{settings.renderer}' (use {', '.join(RENDERERS)})")
@@ -497,15 +482,6 @@ def draw_shape_steps(mesh: Mesh, settings: DrawingSettings, threads: int = 0):
     seeds, seed_faces = sample_seeds(mesh, settings.n_seeds, settings.seed, keep=seen_somewhere)
     seed_visible = ray_visibility(tree, rig, seeds, own_face=seed_faces)
     yield "seeds"
-    n = len(mesh.vertices)
-    vertex_visible = np.zeros((n_views, n), bool)
-    for v in range(n_views):
-        for start in range(0, n, VISIBILITY_CHUNK):
-            stop = min(n, start + VISIBILITY_CHUNK)
-            vertex_visible[v, start:stop] = ray_visibility(
-                tree, rig, mesh.vertices[start:stop], faces=mesh.faces,
-                views=[v], first_index=start)[0]
-            yield f"visibility {v + 1}/{n_views}"
     seed_pixels, _ = project(rig.matrices(), seeds)
     with TempScene(mesh, rig) as ts:
         yield "scene"
@@ -523,5 +499,4 @@ def draw_shape_steps(mesh: Mesh, settings: DrawingSettings, threads: int = 0):
             yield f"views {n_views}/{n_views}"
     return ShapeDrawings(
         name=mesh.name, images=images, cameras=rig.matrices(), seeds=seeds, seed_faces=seed_faces,
-        seed_visible=seed_visible, seed_pixels=seed_pixels.astype(np.float32),
-        vertex_visible=vertex_visible)
+        seed_visible=seed_visible, seed_pixels=seed_pixels.astype(np.float32))
