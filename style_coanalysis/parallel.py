@@ -7,11 +7,17 @@ its k-means and matrix products already keep every core busy through their threa
 dictionaries and word counts in 2 processes took 62.8 s against 66.6 s at 1,050 shapes.) Which
 number of processes is sensible (none inside Blender's own Python, whose `sys.executable` is not
 a Python that can be spawned) is the caller's to decide: `blender.batch.effective_jobs`.
+
+Each worker process gets its share of the cores for its numeric libraries' threads (BLAS,
+OpenMP), so N workers on N cores do not start N threads each and fight over them. The
+process's own threads are not capped: the analysis' results would then depend in their last
+bits on `--jobs` (multi-threaded sums add in another order), which must not change them.
 """
 from __future__ import annotations
 
 import collections
 import multiprocessing
+import os
 import signal
 import sys
 from concurrent.futures import ProcessPoolExecutor
@@ -19,9 +25,10 @@ from pathlib import Path
 from typing import Iterable
 
 _worker_shared: dict = {}
+THREAD_VARIABLES = ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS")
 
 
-def plain_worker_init(shared: dict | None = None) -> None:
+def plain_worker_init(shared: dict | None = None, threads: int = 0) -> None:
     """Runs once in each spawned worker, with or without Blender.
 
     'spawn' hands the worker the parent's sys.path, which already holds the folders bpy adds
@@ -29,11 +36,19 @@ def plain_worker_init(shared: dict | None = None) -> None:
     real module and fails with "No module named '_bpy'"): drop those. Ctrl-C in a terminal
     reaches the whole process group: workers ignore it and the parent, which does get it, ends
     them. `shared`: the keyword arguments every task of `in_processes` has, sent once.
+    `threads`: the worker's share of the cores, the cap on its numeric libraries' threads for
+    its whole life (0: no cap).
     """
     global _worker_shared
     signal.signal(signal.SIGINT, signal.SIG_IGN)
     sys.path[:] = [p for p in sys.path if "bpy" not in Path(p).parts]
     _worker_shared = dict(shared or {})
+    if threads >= 1:
+        # libraries loaded later read these when they load; those loaded already are capped
+        for var in THREAD_VARIABLES:
+            os.environ[var] = str(threads)
+        from threadpoolctl import threadpool_limits
+        threadpool_limits(limits=threads)
 
 
 def _call_shared(fn, item: dict):
@@ -44,7 +59,8 @@ def _call_shared(fn, item: dict):
 def in_processes(fn, items: Iterable[dict], n_items: int, jobs: int, shared: dict | None = None):
     """Generator: `fn(**shared, **item)` for every item (keyword arguments), in their order.
 
-    In min(jobs, n_items) spawned processes, or here when that is 1. `fn` is a module-level
+    In min(jobs, n_items) spawned processes, each with its share of the cores, or here when
+    that is 1. `fn` is a module-level
     function; `shared` (a dictionary's words, say) is sent to each worker once; `items` is read
     lazily, at most two per worker in flight, so a large collection is never pickled at once.
     Closing the generator (a cancel) ends the workers at once.
@@ -55,9 +71,10 @@ def in_processes(fn, items: Iterable[dict], n_items: int, jobs: int, shared: dic
         for item in items:
             yield fn(**(shared or {}), **item)
         return
+    share = max(1, (os.cpu_count() or 1) // n_workers)
     pool = ProcessPoolExecutor(max_workers=n_workers,
                                mp_context=multiprocessing.get_context("spawn"),
-                               initializer=plain_worker_init, initargs=(shared,))
+                               initializer=plain_worker_init, initargs=(shared, share))
     ok = False
     try:
         pending: collections.deque = collections.deque()

@@ -91,11 +91,11 @@ _worker_ready = False
 _worker_queue = None
 
 
-def _worker_init(progress_queue=None) -> None:
-    """Runs once in each spawned drawing worker: `parallel.plain_worker_init`, then a clean factory
-    Blender."""
+def _worker_init(progress_queue=None, threads: int = 0) -> None:
+    """Runs once in each spawned drawing worker: `parallel.plain_worker_init` (its numeric
+    libraries capped at `threads`, its share of the cores), then a clean factory Blender."""
     global _worker_ready, _worker_queue
-    plain_worker_init()
+    plain_worker_init(threads=threads)
     _worker_queue = progress_queue
     import bpy
     from .render import quiet_fds
@@ -242,7 +242,7 @@ def _render_in_workers(todo, settings, n_workers, finish, skipped, worker):
                 waiting = []
             width = 1 if alone else n_workers
             pool = ProcessPoolExecutor(max_workers=width, mp_context=ctx, initializer=_worker_init,
-                                       initargs=(progress_queue,))
+                                       initargs=(progress_queue, threads))
             running: dict = {}
             ok = False
             try:
