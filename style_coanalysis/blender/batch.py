@@ -41,6 +41,7 @@ from ..progress import Cancelled
 
 Progress = Callable[[str, int, int], None]
 WAIT_S = 0.1                # the parent's poll interval while workers render
+IN_HAND = 2                 # shapes submitted per worker: its next one waits while it draws
 # The Dask client of the enclosing `dask_cluster.use_scheduler` block: a context rather than an
 # argument, so the job and its options need not know about Dask (an optional dependency).
 cluster: contextvars.ContextVar = contextvars.ContextVar("style_coanalysis_cluster", default=None)
@@ -221,11 +222,15 @@ def draw_steps(meshes: Sequence[Mesh], settings: DrawingSettings, cache_dir=None
 
 
 def _render_in_workers(todo, settings, n_workers, finish, skipped, worker):
-    """Generator: render `todo` in spawned worker processes, at most n_workers shapes at a time.
+    """Generator: render `todo` in spawned worker processes, n_workers shapes at a time.
 
-    A worker that dies breaks its pool: the shapes it was rendering each get one retry alone in a
-    fresh worker (alone, so a second crash is surely theirs); a shape whose retry dies too is
-    skipped with the reason. The other shapes carry on in a new pool.
+    Each worker has its next shape in hand (`IN_HAND` submitted per worker), so it never waits
+    for the parent to store a finished shape and hand it another: on the zbuffer path, where a
+    shape takes about 0.15 s, that wait was 10-20% of the drawing step (300 sample shapes, 2
+    workers: 24.3 / 21.6 s with one shape per worker, 19.6 / 19.5 s with two).
+    A worker that dies breaks its pool: the shapes the pool had in hand each get one retry alone
+    in a fresh worker (alone, so a second crash is surely theirs); a shape whose retry dies too
+    is skipped with the reason. The other shapes carry on in a new pool.
     """
     threads = max(1, (os.cpu_count() or 1) // n_workers)   # share the cores, never oversubscribe
     ctx = multiprocessing.get_context("spawn")
@@ -241,13 +246,14 @@ def _render_in_workers(todo, settings, n_workers, finish, skipped, worker):
             if not alone:
                 waiting = []
             width = 1 if alone else n_workers
+            depth = 1 if alone else IN_HAND
             pool = ProcessPoolExecutor(max_workers=width, mp_context=ctx, initializer=_worker_init,
                                        initargs=(progress_queue, threads))
             running: dict = {}
             ok = False
             try:
                 while group or running:
-                    while group and len(running) < width:
+                    while group and len(running) < width * depth:
                         item = group.pop(0)
                         _, m, _ = item
                         running[pool.submit(worker, m.name, m.vertices, m.faces, settings,
