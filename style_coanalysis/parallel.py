@@ -28,6 +28,11 @@ _worker_shared: dict = {}
 THREAD_VARIABLES = ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS")
 
 
+def core_share(n_workers: int) -> int:
+    """Each of n_workers processes' share of this machine's cores (at least 1)."""
+    return max(1, (os.cpu_count() or 1) // max(1, int(n_workers)))
+
+
 def plain_worker_init(shared: dict | None = None, threads: int = 0) -> None:
     """Runs once in each spawned worker, with or without Blender.
 
@@ -59,11 +64,11 @@ def _call_shared(fn, item: dict):
 def in_processes(fn, items: Iterable[dict], n_items: int, jobs: int, shared: dict | None = None):
     """Generator: `fn(**shared, **item)` for every item (keyword arguments), in their order.
 
-    In min(jobs, n_items) spawned processes, each with its share of the cores, or here when
-    that is 1. `fn` is a module-level
-    function; `shared` (a dictionary's words, say) is sent to each worker once; `items` is read
-    lazily, at most two per worker in flight, so a large collection is never pickled at once.
-    Closing the generator (a cancel) ends the workers at once.
+    In min(jobs, n_items) spawned processes, each with its share of the cores (`core_share`), or
+    here when that is 1. `fn` is a module-level function; `shared` (a dictionary's words, say)
+    is sent to each worker once; `items` is read lazily, at most two per worker in flight, so a
+    large collection is never pickled at once. Closing the generator (a cancel) ends the
+    workers at once.
     """
     items = iter(items)
     n_workers = max(1, min(int(jobs), int(n_items)))
@@ -71,10 +76,10 @@ def in_processes(fn, items: Iterable[dict], n_items: int, jobs: int, shared: dic
         for item in items:
             yield fn(**(shared or {}), **item)
         return
-    share = max(1, (os.cpu_count() or 1) // n_workers)
     pool = ProcessPoolExecutor(max_workers=n_workers,
                                mp_context=multiprocessing.get_context("spawn"),
-                               initializer=plain_worker_init, initargs=(shared, share))
+                               initializer=plain_worker_init,
+                               initargs=(shared, core_share(n_workers)))
     ok = False
     try:
         pending: collections.deque = collections.deque()

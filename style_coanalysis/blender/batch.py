@@ -35,7 +35,7 @@ import numpy as np
 from ..cache import CODE_VERSION, DrawingCache, cache_key
 from ..drawings import ShapeDrawings
 from ..meshes import InputError, Mesh, normalise
-from ..parallel import end_pool, plain_worker_init
+from ..parallel import core_share, end_pool, plain_worker_init
 from ..params import DrawingSettings
 from ..progress import Cancelled
 
@@ -232,7 +232,7 @@ def _render_in_workers(todo, settings, n_workers, finish, skipped, worker):
     in a fresh worker (alone, so a second crash is surely theirs); a shape whose retry dies too
     is skipped with the reason. The other shapes carry on in a new pool.
     """
-    threads = max(1, (os.cpu_count() or 1) // n_workers)   # share the cores, never oversubscribe
+    threads = core_share(n_workers)    # Cycles' and numpy's threads: never oversubscribe
     ctx = multiprocessing.get_context("spawn")
     progress_queue = ctx.Queue()
     waiting = list(todo)        # not started yet
