@@ -2,8 +2,8 @@
 
 Why one grid: a representative patch is used as a convolution filter over a view's HOG map
 (paper 4.2), so the patch descriptor must be made of exactly the same numbers as the map window
-it is compared with. We therefore compute the HOG map of each whole view once
-(`skimage.feature.hog`, 8x8-pixel cells, 2x2-cell blocks, L2-Hys, `feature_vector=False`) and
+it is compared with. We therefore compute the HOG map of each whole view once (the numbers of
+`skimage.feature.hog`: 8x8-pixel cells, 2x2-cell blocks, L2-Hys, `feature_vector=False`) and
 *cut* a patch's descriptor out of that map: a 48x48 patch spans 6x6 cells = 5x5 overlapping
 blocks of 2x2x9 values, i.e. a (5, 5, 36) window of the view's (24, 24, 36) block map.
 
@@ -22,7 +22,6 @@ from __future__ import annotations
 import tempfile
 
 import numpy as np
-from skimage.feature import hog
 
 PIXELS_PER_CELL = 8
 CELLS_PER_BLOCK = 2
@@ -33,7 +32,12 @@ CHANNELS = CELLS_PER_BLOCK * CELLS_PER_BLOCK * ORIENTATIONS   # values per block
 def hog_images(images: np.ndarray) -> np.ndarray:
     """HOG block maps of a batch of images (n, H, W) -> (n, by, bx, 36) float32.
 
-    One skimage call per image (about 8 ms for 200x200): the map is per-shape work, cacheable.
+    The numbers of `skimage.feature.hog` (9 orientations, 8x8 cells, 2x2 blocks, L2-Hys,
+    `feature_vector=False`), bit for bit (tests/test_features.py), computed for a whole batch
+    at once: skimage normalises the 576 blocks of a 200 px image one by one in Python, 80% of
+    its 8.6 ms an image; here an image takes about 2.5 ms. A cell's histogram is summed pixel by
+    pixel in float32, in skimage's order, so that the maps (and every result read from them) are
+    the library's.
     """
     images = np.asarray(images, np.float32)
     if images.ndim == 2:
@@ -41,16 +45,55 @@ def hog_images(images: np.ndarray) -> np.ndarray:
     n, h, w = images.shape
     by = h // PIXELS_PER_CELL - CELLS_PER_BLOCK + 1
     bx = w // PIXELS_PER_CELL - CELLS_PER_BLOCK + 1
-    out = np.zeros((n, max(by, 0), max(bx, 0), CHANNELS), np.float32)
     if by <= 0 or bx <= 0:
-        return out
-    for i in range(n):
-        blocks = hog(images[i], orientations=ORIENTATIONS,
-                     pixels_per_cell=(PIXELS_PER_CELL, PIXELS_PER_CELL),
-                     cells_per_block=(CELLS_PER_BLOCK, CELLS_PER_BLOCK),
-                     block_norm="L2-Hys", feature_vector=False)
-        out[i] = blocks.reshape(by, bx, CHANNELS)
-    return out
+        return np.zeros((n, max(by, 0), max(bx, 0), CHANNELS), np.float32)
+    batch = 12                              # one shape's views: the arrays stay in cache
+    return np.concatenate([_normalised_blocks(_cell_histograms(images[i:i + batch]))
+                           for i in range(0, n, batch)])
+
+
+def _cell_histograms(images: np.ndarray) -> np.ndarray:
+    """(n, cy, cx, 9) float64 orientation histograms of 8x8-pixel cells, as skimage's
+    `_hoghistogram`: central-difference gradients (zero on the image border), unsigned
+    orientation in 20-degree bins, each cell's magnitudes added in float32 in row-major order,
+    divided by the cell's area."""
+    n, h, w = images.shape
+    p = PIXELS_PER_CELL
+    cy, cx = h // p, w // p
+    g_row = np.zeros_like(images)
+    g_col = np.zeros_like(images)
+    g_row[:, 1:-1, :] = images[:, 2:, :] - images[:, :-2, :]
+    g_col[:, :, 1:-1] = images[:, :, 2:] - images[:, :, :-2]
+    g_row = g_row[:, :cy * p, :cx * p].astype(np.float64)
+    g_col = g_col[:, :cy * p, :cx * p].astype(np.float64)
+    magnitude = np.hypot(g_col, g_row)
+    orientation = np.arctan2(g_row, g_col) * (180 / np.pi) % 180
+    edges = np.float32(180.0 / ORIENTATIONS) * np.arange(1, ORIENTATIONS, dtype=np.float32)
+    bins = np.searchsorted(edges.astype(np.float64), orientation, side="right")
+
+    def by_cell(a):                         # (cells, 64): each cell's pixels, row-major
+        return a.reshape(n, cy, p, cx, p).transpose(0, 1, 3, 2, 4).reshape(n * cy * cx, p * p)
+
+    magnitude = by_cell(magnitude)
+    slot = np.arange(n * cy * cx)[:, None] * ORIENTATIONS + by_cell(bins)
+    total = np.zeros(n * cy * cx * ORIENTATIONS, np.float32)
+    for k in range(p * p):                  # a float64 sum rounded to float32 at every pixel
+        total[slot[:, k]] = total[slot[:, k]] + magnitude[:, k]
+    total /= np.float32(p * p)
+    return total.reshape(n, cy, cx, ORIENTATIONS).astype(np.float64)
+
+
+def _normalised_blocks(hist: np.ndarray, eps: float = 1e-5) -> np.ndarray:
+    """(n, by, bx, 36) float32 L2-Hys normalised 2x2-cell blocks of (n, cy, cx, 9) histograms."""
+    b = CELLS_PER_BLOCK
+    n, cy, cx, _ = hist.shape
+    by, bx = cy - b + 1, cx - b + 1
+    blocks = np.stack([hist[:, r:r + by, c:c + bx] for r in range(b) for c in range(b)], axis=3)
+    blocks = np.ascontiguousarray(blocks.reshape(n, by, bx, CHANNELS))
+    out = blocks / np.sqrt(np.sum(blocks ** 2, axis=-1, keepdims=True) + eps ** 2)
+    out = np.minimum(out, 0.2)
+    out = out / np.sqrt(np.sum(out ** 2, axis=-1, keepdims=True) + eps ** 2)
+    return out.astype(np.float32)
 
 
 def collection_maps(drawings, step=None) -> np.ndarray:

@@ -1,6 +1,7 @@
 """The patch descriptor is the view map's own window: filter and map are comparable."""
 import numpy as np
 import pytest
+from skimage.feature import hog
 
 from style_coanalysis import features
 from style_coanalysis.features import hog_images, patch_blocks, patch_descriptors
@@ -23,6 +24,23 @@ def test_map_layout_is_one_grid_for_views_and_patches():
     assert maps.shape == (2, 24, 24, features.CHANNELS)
     assert patch_blocks(48) == 5
     assert hog_images(np.zeros((3, 48, 48))).shape == (3, 5, 5, features.CHANNELS)
+
+
+@pytest.mark.parametrize("size", [(200, 200), (48, 48), (203, 197)])
+def test_maps_are_skimage_hog_bit_for_bit(size):
+    """hog_images vectorises skimage's HOG for speed; every number must stay the library's."""
+    rng = np.random.default_rng(7)
+    h, w = size
+    imgs = [_drawing(rng, max(h, w))[:h, :w], rng.random((h, w), dtype=np.float32),
+            np.zeros((h, w), np.float32), np.ones((h, w), np.float32)]
+    imgs[1][rng.random((h, w)) < 0.5] = 0.0          # grey levels, flat runs, ties between bins
+    maps = hog_images(np.stack(imgs))
+    for img, m in zip(imgs, maps):
+        ref = hog(img, orientations=9, pixels_per_cell=(8, 8), cells_per_block=(2, 2),
+                  block_norm="L2-Hys", feature_vector=False)
+        assert m.dtype == np.float32
+        np.testing.assert_array_equal(m, ref.reshape(m.shape))
+    assert np.abs(maps[0]).sum() > 0
 
 
 def test_crop_hog_equals_map_window_away_from_the_crop_border():
