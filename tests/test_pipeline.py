@@ -259,6 +259,28 @@ def test_dictionaries_are_independent_draws_and_the_first_is_the_seeds(collectio
     assert result.view_weights.sum() == pytest.approx(1.0)
 
 
+def test_labels_the_unsupervised_cut_honours_change_only_its_names():
+    """Few labels (two per style) that agree with the graph's own cut: the result is that cut,
+    its clusters named by the labels, not the partition the labelled means start k-means to."""
+    from style_coanalysis import graph
+    from style_coanalysis.pipeline import _label_transduction, _seeded_cut, _unit_coordinates
+    rng = np.random.default_rng(1)
+    x = rng.uniform(0, 1, (90, 2))                  # no clear groups: many cuts nearly as good
+    a = graph.affinity(x)
+    own = graph.partition(a, 4, 0)
+    coords = _unit_coordinates(a, 4)
+    styles = np.array([2, 0, 3, 1])                 # style numbers unrelated to the clusters'
+    y = np.full(90, -1)
+    for c in range(4):                              # each cluster's two shapes farthest out
+        m = np.flatnonzero(own == c)
+        far = np.argsort(-np.linalg.norm(coords[m] - coords[m].mean(axis=0), axis=1))[:2]
+        y[m[far]] = styles[c]
+    classes, _ = _label_transduction(a, x, y, 4, 0)
+    assert classes.tolist() == styles[own].tolist()
+    seeded = _seeded_cut(coords, y, 4)
+    assert not np.array_equal(seeded, styles[own])  # the seeded cut alone moves some shapes
+
+
 def test_labels_place_the_centres_and_name_the_clusters_whatever_the_order():
     """Two labels per style in three separated groups: every shape gets its group's style (the
     names come from the labels, not from the cluster numbers), and a reordered input gives the
