@@ -128,15 +128,22 @@ def _relabel_by_appearance(labels: np.ndarray) -> np.ndarray:
     return np.array([lut[c] for c in labels], np.int64)
 
 
+def _one_to_one(a: np.ndarray, b: np.ndarray, n_a: int, n_b: int):
+    """The one-to-one naming of a's clusters (0..n_a-1) by b's (0..n_b-1) that agrees on the
+    most items (Hungarian assignment on their contingency table): (a's clusters, their names
+    in b, items agreeing)."""
+    table = np.zeros((n_a, n_b), np.int64)
+    np.add.at(table, (a, b), 1)
+    r, c = linear_sum_assignment(-table)
+    return r, c, int(table[r, c].sum())
+
+
 def n_changed(old: np.ndarray | None, new: np.ndarray) -> int:
     """Shapes whose cluster changed, after the best one-to-one renaming of clusters."""
     if old is None:
         return int(len(new))
     a, b = np.unique(old, return_inverse=True)[1], np.unique(new, return_inverse=True)[1]
-    table = np.zeros((a.max() + 1, b.max() + 1), np.int64)
-    np.add.at(table, (a, b), 1)
-    r, c = linear_sum_assignment(-table)
-    return int(len(new) - table[r, c].sum())
+    return int(len(new) - _one_to_one(a, b, a.max() + 1, b.max() + 1)[2])
 
 
 def _partition_key(labels: np.ndarray) -> bytes:
@@ -272,9 +279,7 @@ def _named_cut(a: np.ndarray, y: np.ndarray, n_classes: int, random_state: int =
     their class."""
     raw = graph.partition(a, n_classes, random_state)
     lab = y >= 0
-    table = np.zeros((n_classes, n_classes), np.int64)
-    np.add.at(table, (raw[lab], y[lab]), 1)
-    r, c = linear_sum_assignment(-table)
+    r, c, _ = _one_to_one(raw[lab], y[lab], n_classes, n_classes)
     name = np.empty(n_classes, np.int64)
     name[r] = c
     return name[raw]
