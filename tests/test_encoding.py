@@ -217,3 +217,17 @@ def test_the_key_driven_kmeans_start_follows_small_changes_and_spreads():
     def potential(idx):                           # what k-means++ keeps low: d^2 to the start
         return (((x[:, None] - x[idx][None]) ** 2).sum(axis=2).min(axis=1)).sum()
     assert potential(a) < min(potential(rng.choice(3000, 60, replace=False)) for _ in range(5))
+
+
+def test_a_few_changed_descriptors_change_no_other_word():
+    """Descriptors without clusters (where Lloyd's steps run to convergence carry any change
+    through the whole dictionary): changing 3 of 2,000 changes no word but, at most, those 3."""
+    for s in range(4):
+        rng = np.random.default_rng(s)
+        x = rng.random((2000, 36)).astype(np.float32)
+        keys = rng.random(2000)
+        changed = rng.choice(2000, 3, replace=False)
+        y = x.copy()
+        y[changed] += rng.normal(0, 0.05, (3, 36)).astype(np.float32)
+        a, b = representatives(x, 50, 0, keys), representatives(y, 50, 0, keys)
+        assert len(a) == 50 and set(a) ^ set(b) <= set(changed)
