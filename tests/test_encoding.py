@@ -125,6 +125,19 @@ def test_word_counts_assign_each_inked_window_to_its_best_filter():
     assert f.shape == (2, 2) and np.allclose((f ** 2).sum(axis=1), 1.0)
 
 
+def test_counts_against_several_dictionaries_are_each_dictionarys_own():
+    from style_coanalysis.encoding import shape_word_counts, word_counts
+    rng = np.random.default_rng(3)
+    maps = rng.random((3, 8, 8, 36)).astype(np.float32)
+    banks = [rng.random((k, 2, 2, 36)).astype(np.float32) for k in (7, 0, 4, 11)]
+    together = shape_word_counts(maps, banks)
+    assert [c.shape for c in together] == [(3, 7), (3, 0), (3, 4), (3, 11)]
+    for counts, filters in zip(together, banks):
+        np.testing.assert_array_equal(counts, word_counts(maps[None], filters)[0])
+        if len(filters):
+            assert counts.sum() > 0
+
+
 def test_the_dictionary_pools_views_and_keeps_real_patches():
     from style_coanalysis.encoding import DescriptorDraw
     rng = np.random.default_rng(5)
