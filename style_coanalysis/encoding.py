@@ -30,8 +30,9 @@ with max pooling over the image and its quadrants, measured on the 120-shape sam
   Freestyle redraws some lines by a pixel when the coordinates change by 1e-7 (98 of
   sample-120's shapes), and so did k-means++'s usual start and Lloyd's steps run to
   convergence (`LLOYD_STEPS`). With all three by place, a few Lloyd steps, and five
-  such dictionaries drawn with other seeds in one style graph (pipeline.encode), sample-120's
-  partitions under x 1.0000001, OBJ and .blend keep ARI 0.96-1.00 (README, Generalisation).
+  such dictionaries drawn with other seeds in one style graph (pipeline.encode), the file order
+  no longer matters (ARI 1.00) and x 1.0000001, OBJ and .blend keep ARI 0.82-1.00 (sample-120,
+  collection2, hu2017-all; README, Generalisation).
 Vectorised as im2col: the windows of a batch of maps are gathered with a strided view and
 multiplied by the (unit) filter matrix in one product; no Python loop over positions.
 """
