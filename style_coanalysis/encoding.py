@@ -297,8 +297,8 @@ def shape_word_counts(maps: np.ndarray, banks: list, ink: float = 0.5) -> list:
     view = np.repeat(np.arange(v), len(inked) // v)[inked]
     scores = cols[inked] @ np.concatenate([_filter_matrix(f) for f in banks if len(f)], axis=1)
     filled = [counts for counts in out if counts.shape[1]]
-    for counts, part in zip(filled, np.split(scores, np.cumsum([c.shape[1] for c in filled]),
-                                             axis=1)):
+    ends = np.cumsum([counts.shape[1] for counts in filled])
+    for counts, part in zip(filled, np.split(scores, ends[:-1], axis=1)):
         k = part.shape[1]
         counts[:] = np.bincount(view * k + part.argmax(axis=1), minlength=v * k).reshape(v, k)
     return out
