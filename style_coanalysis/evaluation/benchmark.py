@@ -20,7 +20,8 @@ n_seeds=90)`, the first 30 seeds kept for the analysis, through the user drawing
     sizes 24/60/120/240 (4 styles x 5 categories), and at 48 shapes 2/3/4 styles (5
     categories), 1/2/5 categories (4 styles), 2 styles in a 3:1 ratio;
   * `hu2017-all` (all 537 voxel shapes) and `hu2017-60-0..4` (60 each, 15 per style spread over
-    the 5 categories, subset seeds 0..4);
+    the 5 categories, subset seeds 0..4), and `hu2017-styles-2-0..5`: every pair of its four
+    styles, 60 shapes (30 per style over the 5 categories), real two-style make-ups;
   * `collection2`: `evaluation.collection2.generate(size=120, seed=0)` (skipped with a note
     while that module does not exist).
 Modes: `k` (true number of styles), `auto`, `labels-2` (2 per style), `labels-10%`,
@@ -31,6 +32,7 @@ Ground truth is read only here, to draw constraints and to score.
 """
 from __future__ import annotations
 
+import itertools
 import os
 import sys
 import tempfile
@@ -231,6 +233,13 @@ def collection_specs() -> dict:
     specs["collection2-unbalanced"] = ("second collection, 40 shapes, 2 styles 3:1 (30 per style "
                                        "exist)", _subset(_collection2, 40, 42, keep_styles=2,
                                                style_weights=(3, 1)))
+    # real two-style make-ups (as a user's "curvy or straight" collection): every pair of the
+    # four styles, 60 shapes over the 5 categories
+    hu_styles = ("Children", "European", "Japanese", "Ming")
+    for i, pair in enumerate(itertools.combinations(hu_styles, 2)):
+        specs[f"hu2017-styles-2-{i}"] = (f"hu2017 voxel set, 60 shapes, {pair[0]} and {pair[1]} "
+                                         "x 5 categories",
+                                         _subset(_voxel_pool, 60, 50 + i, keep_styles=pair))
     specs["hu2017-all"] = ("hu2017 voxel set, all 537", lambda: list(_voxel_pool()))  # last: slowest
     return specs
 
