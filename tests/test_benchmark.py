@@ -195,3 +195,29 @@ def test_merged_runs_take_each_method_from_the_latest_run_that_has_it():
     assert merged["k"]["default"]["summary"]["purity"]["mean"] == 0.9      # replaced
     assert merged["k"]["paper"]["summary"]["purity"]["mean"] == 0.3        # kept
     assert merged["auto"]["default"] == {"n/a": "failed"}                  # new mode, as it came
+
+
+def test_hu2017_pairs_are_every_two_style_make_up(monkeypatch):
+    """hu2017-styles-2-0..5: each of the six pairs of the four styles once, 60 shapes, 30 per
+    style spread evenly over the five categories."""
+    from types import SimpleNamespace
+    styles, cats = ("Children", "European", "Japanese", "Ming"), ("bed", "cabinet", "chair",
+                                                                   "stool", "table")
+    pool = tuple(SimpleNamespace(truth={"style": s, "category": c}) for s in styles
+                 for c in cats for _ in range(8))
+    monkeypatch.setattr(B, "_voxel_pool", lambda: pool)
+    names = B.select_collections(["hu2017-styles-2"])
+    assert names == [f"hu2017-styles-2-{i}" for i in range(6)]
+    specs = B.collection_specs()
+    pairs = set()
+    for name in names:
+        shapes = specs[name][1]()
+        st = [m.truth["style"] for m in shapes]
+        assert len(shapes) == 60 and len(set(st)) == 2
+        assert all(st.count(s) == 30 for s in set(st))
+        for s in set(st):
+            per_cat = [sum(1 for m in shapes if m.truth["style"] == s and m.truth["category"] == c)
+                       for c in cats]
+            assert per_cat == [6] * 5
+        pairs.add(frozenset(st))
+    assert len(pairs) == 6
