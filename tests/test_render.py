@@ -276,3 +276,33 @@ def test_zbuffer_version_is_in_its_cache_key_only(monkeypatch):
             renderer=r)))
         assert (again == keys[r]) == (r != "zbuffer"), r
     assert keys["freestyle"] == cache_key(mesh, DrawingSettings(renderer="freestyle"), CODE_VERSION)
+
+
+@pytest.mark.parametrize("suggestive", [False, True])
+def test_style_module_draws_what_the_line_set_editor_draws(suggestive, monkeypatch):
+    """The Freestyle style module (compiled predicates and shaders) puts ink on exactly the
+    pixels Freestyle's own parameter editor does for the line set it stands for: visible
+    silhouettes, borders and creases (and suggestive contours) in a new line style."""
+    from style_coanalysis.blender import render
+    from style_coanalysis.sample import generate
+    settings = DrawingSettings(renderer="freestyle", n_views=3, suggestive_contours=suggestive)
+    mesh = normalise(generate(size=6, seed=3)[5])
+    ours = render.draw_lines(mesh, settings)
+    setup = render._setup_freestyle
+
+    def editor(ts, settings, threads):
+        setup(ts, settings, threads)
+        fs = ts.scene.view_layers[0].freestyle_settings
+        fs.mode = "EDITOR"
+        ls = fs.linesets.new("lines")
+        ls.linestyle = ts._new("linestyles", "style")
+        ls.linestyle.color, ls.linestyle.thickness = (0.0, 0.0, 0.0), 1.0
+        ls.select_by_visibility, ls.visibility, ls.select_by_edge_types = True, "VISIBLE", True
+        for kind in ("silhouette", "border", "crease", "suggestive_contour", "ridge_valley",
+                     "material_boundary", "contour", "external_contour", "edge_mark"):
+            setattr(ls, f"select_{kind}", kind in ("silhouette", "border", "crease") or
+                    (suggestive and kind == "suggestive_contour"))
+    monkeypatch.setattr(render, "_setup_freestyle", editor)
+    theirs = render.draw_lines(mesh, settings)
+    assert ours.sum() > 100
+    np.testing.assert_array_equal(ours, theirs)
