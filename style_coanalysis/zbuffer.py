@@ -310,6 +310,22 @@ class ShapeBuffers:
                                  self.focal_px)
         return out
 
+    def points_seen_by_any(self, points: np.ndarray, own_face: np.ndarray) -> np.ndarray:
+        """(n,) bool: `points_visible(...).any(axis=0)`, each view testing only the points no
+        earlier view saw (a point's answer does not depend on the others tested with it)."""
+        points = np.asarray(points, np.float64).reshape(-1, 3)
+        own_face = np.asarray(own_face)
+        seen = np.zeros(len(points), bool)
+        for v in range(len(self.cameras)):
+            rest = np.flatnonzero(~seen)
+            if len(rest) == 0:
+                break
+            pix, depth = project(self.cameras[v:v + 1], points[rest])
+            seen[rest] = ray_visible(*self.buffers[v], pix[0], points[rest], depth[0],
+                                     own_face[rest], self.locations[v], self.triangles,
+                                     self.neighbours, self.focal_px)
+        return seen
+
     def lines(self, crease_angle_deg: float) -> np.ndarray:
         """(V, size, size) float32 ink: visible silhouettes, borders and creases, 1 px wide."""
         edges, ef = self.edges, self.edge_faces

@@ -454,7 +454,7 @@ def _zbuffer_steps(mesh: Mesh, settings: DrawingSettings, rig: Rig):
     yield "depth buffers"
 
     def seen_somewhere(points, faces):
-        return buffers.points_visible(points, own_face=faces).any(axis=0)
+        return buffers.points_seen_by_any(points, faces)
 
     seeds, seed_faces = sample_seeds(mesh, settings.n_seeds, settings.seed, keep=seen_somewhere)
     seed_visible = buffers.points_visible(seeds, own_face=seed_faces)
