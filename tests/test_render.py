@@ -306,3 +306,16 @@ def test_style_module_draws_what_the_line_set_editor_draws(suggestive, monkeypat
     theirs = render.draw_lines(mesh, settings)
     assert ours.sum() > 100
     np.testing.assert_array_equal(ours, theirs)
+
+
+@pytest.mark.parametrize("renderer", RENDERERS)
+def test_mesh_outside_the_unit_sphere_is_refused_by_name(renderer):
+    """A mesh drawn without `normalise` (here 50 units across) gets an error naming it, before
+    any scene is made, rather than cameras inside it."""
+    from style_coanalysis.blender.render import draw_shape
+    from style_coanalysis.meshes import InputError
+    big = cube()
+    big = Mesh("big_cube", big.vertices * 50.0, big.faces)
+    with pytest.raises(InputError, match="'big_cube' reaches .* normalise"):
+        draw_shape(big, DrawingSettings(renderer=renderer))
+    draw_shape(normalise(big), DrawingSettings(renderer=renderer))

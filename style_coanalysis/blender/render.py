@@ -41,6 +41,7 @@ from ..zbuffer import ShapeBuffers
 
 PREFIX = "SCA_tmp_"
 VISIBILITY_TOL_PX = 1.0     # depth slack of the visibility test, in pixels' worth at the point
+NORMALISED_REACH = 1.001    # a normalised mesh's farthest vertex from the origin (float32 slack)
 
 
 def rig_for(settings: DrawingSettings) -> Rig:
@@ -430,8 +431,19 @@ def _ray_view(tree: BVHTree, loc, focal_px: float, points: np.ndarray, faces) ->
 
 
 # ---------------------------------------------------------------- entry point
+def check_normalised(mesh: Mesh) -> None:
+    """Refuse a mesh outside the unit sphere (`meshes.normalise` puts every shape in it): the
+    rig's cameras would sit inside it, and a depth buffer of triangles spanning the camera
+    plane once ran the process out of memory (a raw voxel model 53 units across)."""
+    reach = float(np.linalg.norm(np.asarray(mesh.vertices, np.float64), axis=1).max(initial=0.0))
+    if reach > NORMALISED_REACH:
+        raise InputError(f"'{mesh.name}' reaches {reach:.3g} units from the origin: draw "
+                         "shapes normalised into the unit sphere (meshes.normalise)")
+
+
 def draw_lines(mesh: Mesh, settings: DrawingSettings, threads: int = 0) -> np.ndarray:
     """The (V, H, W) ink images alone, with the chosen renderer (no seeds, no visibility)."""
+    check_normalised(mesh)
     rig = rig_for(settings)
     if settings.renderer == "zbuffer":
         return ShapeBuffers(mesh.vertices, mesh.faces, rig.matrices(), rig.locations(),
@@ -489,6 +501,7 @@ def draw_shape_steps(mesh: Mesh, settings: DrawingSettings, threads: int = 0):
         raise InputError(f"unknown renderer '{settings.renderer}' (use {', '.join(RENDERERS)})")
     if len(mesh.faces) == 0:
         raise InputError(f"'{mesh.name}' has no faces")
+    check_normalised(mesh)
     rig = rig_for(settings)
     if settings.renderer == "zbuffer":
         return (yield from _zbuffer_steps(mesh, settings, rig))
