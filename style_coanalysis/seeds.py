@@ -28,8 +28,7 @@ from .meshes import InputError, Mesh, face_areas
 
 CANDIDATES_PER_SEED = 40     # enough candidates that the farthest-point pick is nearly even
 MIN_CANDIDATES = 2000
-LLOYD_STEPS = 10             # relaxation steps per check that the centres have settled
-LLOYD_MAX_STEPS = 300
+LLOYD_MAX_STEPS = 300        # relaxation steps at most (they settle in about 20-30)
 
 
 def sample_surface(vertices: np.ndarray, faces: np.ndarray, n: int,
@@ -95,18 +94,19 @@ def sample_seeds(mesh: Mesh, n: int, seed: int = 0,
     pick = farthest_point_order(cand, n, start=start)
     if n < 2:
         return cand[pick].astype(np.float32), cand_faces[pick].astype(np.int32)
-    # Lloyd from the farthest-point start until it settles; an emptied cluster is topped up below
+    # Lloyd from the farthest-point start until a step moves no centre (a fixed point: its
+    # labels are the final centres' own); an emptied cluster is topped up below
     centres = cand[pick]
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
-        for _ in range(LLOYD_MAX_STEPS // LLOYD_STEPS):
-            moved, labels = kmeans2(cand, centres, iter=LLOYD_STEPS, minit="matrix",
-                                    missing="warn", seed=seed)
+        for _ in range(LLOYD_MAX_STEPS):
+            moved, labels = kmeans2(cand, centres, iter=1, minit="matrix", missing="warn")
             settled = np.array_equal(moved, centres)
             centres = moved
             if settled:
                 break
-        _, labels = kmeans2(cand, centres, iter=1, minit="matrix", missing="warn", seed=seed)
+        else:
+            _, labels = kmeans2(cand, centres, iter=1, minit="matrix", missing="warn")
     # snap every centre to the nearest candidate of its own cluster (distinct, on the surface)
     d = np.linalg.norm(cand - centres[labels], axis=1)
     order = np.lexsort((d, labels))
