@@ -24,6 +24,13 @@ with max pooling over the image and its quadrants, measured on the 120-shape sam
 * Small patches (24 px = 3x3 cells = 2x2 blocks): ornaments are small at 200 px; 48 px windows
   are dominated by the part layout around them (see the purities above). 48 px words are kept
   as the layout profile that finds a shape's structural look-alikes (views.py).
+* More than one small size: the dictionaries are cut at 24, 16, 32, 24 and 16 px in turn
+  (`params.dictionary_patch_size`). One dictionary alone (seed 0, k given), 32 px raised the
+  real hu2017 pairs (hu2017-styles-2-0 0.73 -> 0.82, -2-3 0.53 -> 0.62) and lowered generated
+  collections (sample-24 0.79 -> 0.54, collection2 0.68 -> 0.57); 16 px raised sample-60
+  0.67 -> 0.87 and lowered collection2-styles-2 0.58 -> 0.52. No one size holds everywhere,
+  so the style graph fuses them, as it fuses the look-alike ladder's rungs (README,
+  Generalisation: the five sizes against five 24 px dictionaries).
 * The dictionary is drawn by place (shape name, view, seed: `patch_keys`), with k-means
   started by place too (`plusplus_by_key`): mini-batch k-means and a positional random draw
   made one patch more or less change the whole dictionary, a draw by content did too, since

@@ -32,7 +32,8 @@ class AnalysisParams:
     """The global analysis (paper sections 4.1-4.5) with the paper's parameter values."""
 
     method: str = "default"              # "default" or "paper" (sections 3-4.5 as written)
-    patch_size: int = 24                 # pixels, style patches/filters (paper: 48; see pipeline)
+    patch_size: int = 24                 # pixels, the first dictionary's style patches (the result's words)
+    other_patch_sizes: tuple = (16, 32)  # pixels, the other dictionaries' patches, in turn (see pipeline)
     n_representatives: int = 50          # k-means centres of the layout (structure) dictionary
     n_words: int = 200                   # k-means centres of the style dictionary (all views)
     n_dictionaries: int = 5              # dictionaries drawn independently; their graphs averaged
@@ -51,6 +52,12 @@ class AnalysisParams:
 
     def as_dict(self) -> dict:
         return asdict(self)
+
+    def dictionary_patch_size(self, member: int) -> int:
+        """The style patch size of the `member`-th dictionary: `patch_size`, then each of
+        `other_patch_sizes` in turn, round and round (24, 16, 32, 24, 16 for five)."""
+        sizes = (self.patch_size, *self.other_patch_sizes)
+        return int(sizes[member % len(sizes)])
 
 
 @dataclass(frozen=True)

@@ -1,6 +1,6 @@
 """The whole analysis in one call (paper 4.1-4.5): drawings in, style clusters and style words out.
 
-    patches (24 px) -> HOG maps -> several dictionaries of style words, each for all views
+    patches (24, 16, 32 px) -> HOG maps -> several dictionaries of style words, each for all views
     -> per shape and dictionary: word profile, layout profile (48 px words); line character
     -> [views (views.word_views, line character) -> style graph (graph.py) -> clusters
         -> reselect each dictionary's words]*
@@ -17,7 +17,9 @@ stable) but each stage is made to hold on collections it was not tuned on:
   not azimuth-aligned; ornament is small at 200 px); several are drawn independently
   (`params.n_dictionaries`) and every one's views enter the style graph, so the cut does not
   hang on which patches one draw happened to pick (where the cut is ambiguous, a few words
-  redrawn by a 1e-7 change of coordinates moved it: issue 11, README);
+  redrawn by a 1e-7 change of coordinates moved it: issue 11, README); they are cut at more
+  than one patch size (`params.dictionary_patch_size`), since no one size held on every
+  collection (encoding.py);
 * the views are the word profile relative to structural look-alikes at every scale of a ladder,
   plus the line character (views.py), fused as graphs (graph.py): no neighbour count or
   collection fraction is chosen for the collection at hand;
@@ -377,7 +379,7 @@ def _max_clusters(n: int) -> int:
 class Dictionary:
     """One drawn dictionary of style words and what the clustering rounds read through it."""
 
-    bank: FilterBank             # the style words (24 px patches)
+    bank: FilterBank             # the style words (params.dictionary_patch_size px patches)
     rungs: list                  # (N, K) per rung of the ladder: word profile relative to look-alikes
     relative: np.ndarray         # (N, K) their mean over the ladder
 
@@ -405,7 +407,9 @@ def encode(drawings, params: AnalysisParams, maps=None, progress=None) -> Encodi
     """Patches -> HOG maps -> dictionaries -> word, layout and line profiles of every shape.
 
     `params.n_dictionaries` dictionaries are drawn independently (different seeds, so different
-    patches and k-means starts), each a pair: style words (24 px) and layout words (48 px).
+    patches and k-means starts), each a pair: style words (at its patch size,
+    `params.dictionary_patch_size`: 24, 16, 32, 24, 16 px) and layout words (48 px, at the
+    first size's seeds, so every dictionary's look-alikes come from the same patches).
     Two passes over the shapes, one shape at a time, so memory does not grow with the HOG maps:
     1. each shape's maps (kept in a temporary `MapStore` unless `maps`, a sequence of per-shape
        maps, is given), its line character, and its inked patches offered to every dictionary
@@ -417,12 +421,14 @@ def encode(drawings, params: AnalysisParams, maps=None, progress=None) -> Encodi
     if params.n_dictionaries < 1:
         raise InputError(f"need at least one dictionary, got n_dictionaries={params.n_dictionaries}")
     states = [dictionary_state(params.random_state, m) for m in range(params.n_dictionaries)]
+    sizes = [params.dictionary_patch_size(m) for m in range(params.n_dictionaries)]
     timings = {"patches": 0.0, "hog": 0.0}
     store = MapStore() if maps is None else None
     source = store if store is not None else maps       # where each shape's maps are read
     try:
-        draws = [(DescriptorDraw(params.patch_size, salt=1 + rs),
-                  DescriptorDraw(params.structure_patch_size, salt=2 + rs)) for rs in states]
+        draws = [(DescriptorDraw(size, salt=1 + rs),
+                  DescriptorDraw(params.structure_patch_size, salt=2 + rs))
+                 for size, rs in zip(sizes, states)]
         lines, n_patches = [], 0
         for i, d in enumerate(drawings):
             prog.step("hog" if store is not None else "patches", i, n)
@@ -432,10 +438,12 @@ def encode(drawings, params: AnalysisParams, maps=None, progress=None) -> Encodi
             m = source[i]
             timings["hog"] += time.perf_counter() - t
             t = time.perf_counter()
-            p = extract_patches([d], size=params.patch_size)
-            n_patches += len(p)
-            for pair in draws:
-                for draw in pair:
+            # the patches at each size's seeds (a seed whose window is blank at one size may
+            # not be at another); the layout words are drawn at the first size's seeds
+            found = {size: extract_patches([d], size=size) for size in dict.fromkeys(sizes)}
+            n_patches += len(found[sizes[0]])
+            for (word_draw, layout_draw), size in zip(draws, sizes):
+                for draw, p in ((word_draw, found[size]), (layout_draw, found[sizes[0]])):
                     draw.add(m, i, d.name, p.view, p.seed, p.centre)
             lines.append(line_character(m))
             timings["patches"] += time.perf_counter() - t
@@ -454,13 +462,18 @@ def encode(drawings, params: AnalysisParams, maps=None, progress=None) -> Encodi
 
         t = time.perf_counter()
         counts = [(np.zeros((n, len(b))), np.zeros((n, len(lb)))) for b, lb in banks]
+        # the dictionaries of one patch size are matched together (their windows cut once)
+        groups = [[j for j, s in enumerate(sizes) if s == size] for size in dict.fromkeys(sizes)]
         for i in range(n):
             prog.step("encode", i, n)
             m = source[i]
-            words_i = shape_word_counts(m, [b.hog for b, _ in banks])
+            for group in groups:
+                words_i = shape_word_counts(m, [banks[j][0].hog for j in group])
+                for j, w in zip(group, words_i):
+                    counts[j][0][i] = w.sum(axis=0)
             layout_i = shape_word_counts(m, [lb.hog for _, lb in banks])
-            for (c, lc), w, lw in zip(counts, words_i, layout_i):
-                c[i], lc[i] = w.sum(axis=0), lw.sum(axis=0)
+            for (_, lc), lw in zip(counts, layout_i):
+                lc[i] = lw.sum(axis=0)
     finally:
         if store is not None:
             store.close()

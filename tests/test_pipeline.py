@@ -251,6 +251,14 @@ def test_dictionaries_are_independent_draws_and_the_first_is_the_seeds(collectio
     np.testing.assert_array_equal(one.dictionaries[0].rungs, three.dictionaries[0].rungs)
     hogs = [d.bank.hog for d in three.dictionaries]
     assert not np.array_equal(hogs[0], hogs[1]) and not np.array_equal(hogs[1], hogs[2])
+    # each is cut at its own patch size: the first at `patch_size`, then the others in turn
+    sizes = [PARAMS.dictionary_patch_size(m) for m in range(5)]
+    assert sizes == [PARAMS.patch_size, *PARAMS.other_patch_sizes, PARAMS.patch_size,
+                     PARAMS.other_patch_sizes[0]] and len(set(sizes)) == 3
+    assert [h.shape[1] for h in hogs] == [patch_blocks(s) for s in sizes[:3]]
+    same = encode(drawings, replace(PARAMS, n_dictionaries=3, other_patch_sizes=()), maps=maps)
+    assert {d.bank.hog.shape[1] for d in same.dictionaries} == {patch_blocks(PARAMS.patch_size)}
+    np.testing.assert_array_equal(same.dictionaries[0].rungs, three.dictionaries[0].rungs)
 
     result = analyse(drawings, replace(PARAMS, n_dictionaries=3), maps=maps, encoded=three)
     np.testing.assert_array_equal(result.words, three.dictionaries[0].bank.hog)
