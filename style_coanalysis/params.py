@@ -32,8 +32,8 @@ class AnalysisParams:
     """The global analysis (paper sections 4.1-4.5) with the paper's parameter values."""
 
     method: str = "default"              # "default" or "paper" (sections 3-4.5 as written)
-    patch_size: int = 24                 # pixels, the first dictionary's style patches (the result's words)
-    other_patch_sizes: tuple = (16, 32)  # pixels, the other dictionaries' patches, in turn (see pipeline)
+    patch_size: int = 24                 # pixels, the first dictionary's style words (the result's)
+    other_patch_sizes: tuple[int, ...] = (16, 32)  # pixels, the other dictionaries', in turn
     n_representatives: int = 50          # k-means centres of the layout (structure) dictionary
     n_words: int = 200                   # k-means centres of the style dictionary (all views)
     n_dictionaries: int = 5              # dictionaries drawn independently; their graphs averaged
