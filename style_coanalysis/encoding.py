@@ -259,6 +259,16 @@ def _windows(maps: np.ndarray, nb: int, ink: float):
     return cols, norm, inked, (v, oy, ox)
 
 
+def _match_scores(rows: np.ndarray, filter_matrix: np.ndarray) -> np.ndarray:
+    """Windows' dot products with the unit filters, in float64 and rounded to 1e-9, so that which
+    word wins does not depend on the machine. In float32 the products rounded differently with
+    the matrix's width and the BLAS threads (an AMD EPYC: the first dictionary's counts changed
+    when other dictionaries were matched with it, and a match's cosine with the number of
+    jobs), and near-equal words traded places; float64 sums of float32 products differ by about
+    1e-16, far below the rounding, and words that tie after it go to the lowest index."""
+    return np.round(np.asarray(rows, np.float64) @ np.asarray(filter_matrix, np.float64), 9)
+
+
 def _filter_matrix(filters: np.ndarray) -> np.ndarray:
     """(nb*nb*C, K) unit filters laid out as the window rows of `_windows`."""
     return unit_rows(np.asarray(filters, np.float32).transpose(0, 3, 1, 2)).T
@@ -283,7 +293,7 @@ def word_assignments(maps: np.ndarray, filters: np.ndarray, ink: float = 0.5):
     cols, norm, inked, shape = win
     best = np.zeros(len(cols), np.int64)
     sim = np.zeros(len(cols))
-    scores = cols[inked] @ _filter_matrix(filters)
+    scores = _match_scores(cols[inked], _filter_matrix(filters))
     best[inked] = scores.argmax(axis=1)
     sim[inked] = scores[np.arange(len(scores)), best[inked]] / np.maximum(norm[inked], EPS)
     return best.reshape(shape), sim.reshape(shape), inked.reshape(shape)
@@ -302,7 +312,8 @@ def shape_word_counts(maps: np.ndarray, banks: list, ink: float = 0.5) -> list:
         return out
     cols, _, inked, _ = win
     view = np.repeat(np.arange(v), len(inked) // v)[inked]
-    scores = cols[inked] @ np.concatenate([_filter_matrix(f) for f in banks if len(f)], axis=1)
+    scores = _match_scores(cols[inked],
+                           np.concatenate([_filter_matrix(f) for f in banks if len(f)], axis=1))
     filled = [counts for counts in out if counts.shape[1]]
     ends = np.cumsum([counts.shape[1] for counts in filled])
     for counts, part in zip(filled, np.split(scores, ends[:-1], axis=1)):
