@@ -23,7 +23,11 @@ n_seeds=90)`, the first 30 seeds kept for the analysis, through the user drawing
     the 5 categories, subset seeds 0..4), and `hu2017-styles-2-0..5`: every pair of its four
     styles, 60 shapes (30 per style over the 5 categories), real two-style make-ups;
   * `collection2`: `evaluation.collection2.generate(size=120, seed=0)` (skipped with a note
-    while that module does not exist).
+    while that module does not exist), and its make-ups of 48 and 40 shapes;
+  * `collection3-60` and `collection3-25`: `evaluation.collection3.generate(size=60, seed=0)`
+    and a stratified 25 of it, two styles (curvy, straight-lined) over tables, chairs and
+    benches, shaped like the real collection of issue 11 (written from a spec by a helper that
+    read neither the other generators nor the analysis).
 Modes: `k` (true number of styles), `auto`, `labels-2` (2 per style), `labels-10%`,
 `labels-20%` (every style at least once), `triplets-50`, `triplets-300` (label-derived:
 a and b share a style, c has another; k given). Seed s changes the label / triplet draw and
@@ -191,6 +195,15 @@ def _collection2():
     return list(collection2.generate(size=120, seed=0))
 
 
+@lru_cache(maxsize=1)
+def _collection3_pool():
+    try:
+        from . import collection3
+    except ImportError as exc:
+        raise CollectionUnavailable(f"collection3 not available yet ({exc})") from None
+    return tuple(collection3.generate(size=60, seed=0))
+
+
 class CollectionUnavailable(RuntimeError):
     """A collection whose source does not exist (yet): skipped with a note."""
 
@@ -233,6 +246,13 @@ def collection_specs() -> dict:
     specs["collection2-unbalanced"] = ("second collection, 40 shapes, 2 styles 3:1 (30 per style "
                                        "exist)", _subset(_collection2, 40, 42, keep_styles=2,
                                                style_weights=(3, 1)))
+    # a third generated collection shaped like the issue's real one (curvy or straight-lined
+    # tables, chairs and benches, smooth meshes of 9k-77k faces, sizes 0.4-600): its 25-shape
+    # make-up is drawn from the 60 (so from the same drawings in the cache)
+    specs["collection3-60"] = ("third generated collection, 60 shapes, curvy or straight x 3 "
+                               "categories", lambda: list(_collection3_pool()))
+    specs["collection3-25"] = ("third generated collection, 25 shapes, curvy or straight x 3 "
+                               "categories", _subset(_collection3_pool, 25, 60))
     # real two-style make-ups (as a user's "curvy or straight" collection): every pair of the
     # four styles, 60 shapes over the 5 categories
     hu_styles = ("Children", "European", "Japanese", "Ming")
