@@ -1,4 +1,4 @@
-"""Style regions against the true decorative faces, on the sample and on collection2.
+"""Style regions against the true decorative faces, on the sample, collection2 and collection3.
 
 For each collection and seed: the analysis as `make demo` runs it (20% of the shapes labelled,
 at least one per style, drawn with the seed; `random_state` = seed), then every shape's style
@@ -6,7 +6,7 @@ regions (faces with style weight > 0.5, `regions.face_weights`) scored by area (
 figure) and by face count against the generator's per-face truth, beside as many random faces
 per shape (same seed). Ground truth is read only here, to pick the labels and to score.
 
-    python bench/bench_localisation.py [--collections sample collection2] [--seeds 3]
+    python bench/bench_localisation.py [--collections sample collection2 collection3] [--seeds 3]
 """
 from __future__ import annotations
 
@@ -38,7 +38,10 @@ def collection(name: str):
     if name == "collection2":
         from style_coanalysis.evaluation.collection2 import generate
         return generate(size=120, seed=0), "collection2.generate(size=120, seed=0)"
-    raise SystemExit(f"unknown collection '{name}' (sample, collection2)")
+    if name == "collection3":
+        from style_coanalysis.evaluation.collection3 import generate
+        return generate(size=60, seed=0), "collection3.generate(size=60, seed=0)"
+    raise SystemExit(f"unknown collection '{name}' (sample, collection2, collection3)")
 
 
 def run_collection(name: str, seeds: int, renderer: str):
