@@ -121,7 +121,9 @@ def test_seeds_barely_move_when_the_filter_drops_one_candidate():
 
 def test_seeds_stay_when_the_coordinates_are_written_as_text_and_read_back():
     """An OBJ file holds 6 decimals: the candidates must not depend on a running sum of the
-    face areas, where such a change moved candidates to other faces on most shapes."""
+    face areas, where such a change moved candidates to other faces on most shapes. (The
+    normalised frame's grid hides most such changes from the seeds; this is the seeds' own
+    steadiness, so the text is not normalised again.)"""
     from style_coanalysis import sample
     from style_coanalysis.meshes import Mesh, normalise
 
@@ -130,6 +132,6 @@ def test_seeds_stay_when_the_coordinates_are_written_as_text_and_read_back():
         mesh = normalise(mesh)
         text = Mesh(mesh.name, np.round(mesh.vertices.astype(np.float64), 6), mesh.faces)
         a, _ = sample_seeds(mesh, 90, 0)
-        b, _ = sample_seeds(normalise(text), 90, 0)
+        b, _ = sample_seeds(text, 90, 0)
         stayed.append((np.linalg.norm(a[:, None] - b[None], axis=2).min(axis=1) < 1e-4).mean())
     assert np.mean(stayed) >= 0.95, stayed
