@@ -95,7 +95,9 @@ def surface_centroid(vertices: np.ndarray, faces: np.ndarray) -> np.ndarray:
 
 
 def normalisation(mesh: Mesh, up: str = "z") -> tuple[np.ndarray, float]:
-    """(centre, radius) of the normalised frame, in the +Z-up frame: normalised = (v' - c) / r."""
+    """(centre, radius) of the normalised frame, in the +Z-up frame: normalised = (v' - c) / r,
+    rounded to NORMALISED_GRID by `normalise` (so `to_world` maps it back to within half a
+    grid step of r)."""
     v = up_to_z(mesh.vertices.astype(np.float64), up)
     c = surface_centroid(v, mesh.faces)
     return c, float(np.linalg.norm(v - c, axis=1).max())
