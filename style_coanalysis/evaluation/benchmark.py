@@ -197,11 +197,8 @@ def _collection2():
 
 @lru_cache(maxsize=1)
 def _collection3_pool():
-    try:
-        from . import collection3
-    except ImportError as exc:
-        raise CollectionUnavailable(f"collection3 not available yet ({exc})") from None
-    return tuple(collection3.generate(size=60, seed=0))
+    from .collection3 import generate
+    return tuple(generate(size=60, seed=0))
 
 
 class CollectionUnavailable(RuntimeError):
