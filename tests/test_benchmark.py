@@ -183,6 +183,19 @@ def test_missing_collection_is_skipped_with_a_note(monkeypatch):
     assert "skipped: not written yet" in B.summary_table(res)
 
 
+def test_a_machine_without_the_voxel_data_skips_the_voxel_collections(monkeypatch, tmp_path):
+    from style_coanalysis.evaluation import voxels
+    monkeypatch.setattr(voxels, "resolve_root", lambda root: str(tmp_path))   # no labels.csv
+    B._voxel_pool.cache_clear()
+    try:
+        res = B.evaluate(["hu2017-60-0"], modes=["k"], methods=["default"], seeds=1,
+                         log=lambda *_: None)
+    finally:
+        B._voxel_pool.cache_clear()
+    assert res["collections"] == {}
+    assert str(tmp_path) in res["skipped_collections"]["hu2017-60-0"]
+
+
 def test_merged_runs_take_each_method_from_the_latest_run_that_has_it():
     def run(method, value, extra=None):
         row = {method: {"summary": {"purity": {"mean": value}}}}

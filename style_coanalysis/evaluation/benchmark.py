@@ -49,6 +49,7 @@ from typing import Callable, Iterable, Sequence
 import numpy as np
 
 from .. import metrics
+from ..meshes import InputError
 from ..params import AnalysisParams, DrawingSettings
 
 DRAWING_SETTINGS = DrawingSettings(renderer="freestyle", n_seeds=90)
@@ -183,16 +184,18 @@ def _sample_pool():
 
 @lru_cache(maxsize=1)
 def _voxel_pool():
+    """The hu2017 voxel set; its data folder lives beside the repository (../shared/data), and a
+    machine without it skips the voxel collections with a note."""
     from .voxels import load_hu2017
-    return tuple(load_hu2017())
+    try:
+        return tuple(load_hu2017())
+    except InputError as exc:
+        raise CollectionUnavailable(str(exc)) from None
 
 
 def _collection2():
-    try:
-        from . import collection2
-    except ImportError as exc:
-        raise CollectionUnavailable(f"collection2 not available yet ({exc})") from None
-    return list(collection2.generate(size=120, seed=0))
+    from .collection2 import generate
+    return list(generate(size=120, seed=0))
 
 
 @lru_cache(maxsize=1)
@@ -202,7 +205,7 @@ def _collection3_pool():
 
 
 class CollectionUnavailable(RuntimeError):
-    """A collection whose source does not exist (yet): skipped with a note."""
+    """A collection whose source is not on this machine: skipped with a note."""
 
 
 def _subset(pool_fn, size, seed, **kw):
