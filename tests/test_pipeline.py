@@ -115,6 +115,35 @@ def test_deterministic(collection, unsupervised):
     np.testing.assert_allclose(again.fused, unsupervised[0].fused)
 
 
+def test_later_rounds_refine_the_all_words_graph_rather_than_replace_it(collection, monkeypatch):
+    """After the first round the cut reads the mean of the first round's graph (every word) and
+    the kept words' graph, so the words one round keeps cannot pull the next cut away from what
+    all the words say (the damping that keeps a few redrawn pixels from growing round by round)."""
+    from style_coanalysis import pipeline
+    drawings, _, _ = collection
+    built, cut = [], []
+    style_graph, cluster = pipeline._style_graph, pipeline._cluster
+
+    def recording_graph(*args, **kwargs):
+        out = style_graph(*args, **kwargs)
+        built.append(out[0].toarray())
+        return out
+
+    def recording_cut(a, *args, **kwargs):
+        cut.append(a.toarray())
+        return cluster(a, *args, **kwargs)
+
+    monkeypatch.setattr(pipeline, "_style_graph", recording_graph)
+    monkeypatch.setattr(pipeline, "_cluster", recording_cut)
+    result = analyse(drawings, PARAMS)
+    assert len(result.rounds) >= 2 and len(cut) == len(built) == len(result.rounds)
+    assert result.rounds[1]["n_filters"] < len(result.words)      # round 2 read fewer words
+    np.testing.assert_allclose(cut[0], built[0])
+    for later, own in zip(cut[1:], built[1:]):
+        assert not np.allclose(own, built[0])
+        np.testing.assert_allclose(later, 0.5 * (built[0] + own))
+
+
 def test_cancel_and_bad_constraints_stop_before_work(collection):
     drawings, _, _ = collection
     calls = []
