@@ -352,10 +352,12 @@ class TripletClustering(ClusterMixin, BaseEstimator):
        pairs as across cannot-linked ones are switched off). The paper's A = V^T V is the
        special case with unit weights (``metric=False``).
     4. A' = A + N_m - N_c with the closed constraint indicators (eq. 3).
-    5. * Y is initialised from a constrained spectral embedding (Kamvar et al. 2003: a local-
-       scaling kNN affinity of the weighted features with must-linked pairs set to 1 and cannot-
-       linked ones to 0, top-C eigenvectors, k-means) rather than from A' alone: sparse
-       constraints hardly move a dense similarity, they do move a sparse graph.
+    5. * Y is initialised from a constrained spectral embedding (Kamvar et al. 2003: an
+       affinity graph with must-linked pairs set to its strongest tie and cannot-linked ones to
+       0, top-C eigenvectors, k-means) rather than from A' alone: sparse constraints hardly
+       move a dense similarity, they do move a sparse graph. The graph is the caller's
+       (``fit(..., affinity=)``; the analysis passes its style graph) or else a local-scaling
+       graph of the weighted features' `k_neighbors` nearest.
     6. A' ~ Y S Y^T by semi-NMF multiplicative updates (S free in sign, A' has negative entries).
     7. * Labels: the memberships Y summed over each must-link component, one cluster per
        component, cannot-linked components kept apart greedily, and exactly C non-empty
@@ -373,19 +375,31 @@ class TripletClustering(ClusterMixin, BaseEstimator):
         self.k_neighbors = k_neighbors
         self.similarity = similarity
 
-    def _spectral_init(self, X, same, diff, C, rng):
+    def _knn_affinity(self, X):
+        """Local-scaling affinity of each point's `k_neighbors` nearest, symmetrised."""
         n = X.shape[0]
         k = min(int(self.k_neighbors), n - 1)
         D2 = pairwise_distances(X, metric="sqeuclidean")
         sig = np.sqrt(np.maximum(np.sort(D2, axis=1)[:, min(k, n - 1)], 1e-24))
         Aff = np.exp(-D2 / np.outer(sig, sig))
-        # keep a symmetric kNN graph
         nn = np.argsort(D2, axis=1)[:, 1:k + 1]
         mask = np.zeros((n, n), bool)
         mask[np.repeat(np.arange(n), k), nn.ravel()] = True
         mask |= mask.T
-        Aff = np.where(mask, Aff, 0.0)
-        Aff[same] = 1.0
+        return np.where(mask, Aff, 0.0)
+
+    def _spectral_init(self, X, same, diff, C, rng, affinity=None):
+        n = X.shape[0]
+        if affinity is None:
+            Aff, strongest = self._knn_affinity(X), 1.0
+        else:
+            Aff = np.asarray(affinity.toarray() if hasattr(affinity, "toarray") else affinity,
+                             dtype=np.float64)
+            if Aff.shape != (n, n):
+                raise ValueError(f"affinity must be ({n}, {n}), got {Aff.shape}")
+            Aff = 0.5 * (Aff + Aff.T)
+            strongest = Aff.max()
+        Aff[same] = strongest
         Aff[diff] = 0.0
         np.fill_diagonal(Aff, 0.0)
         d = Aff.sum(axis=1)
@@ -395,7 +409,10 @@ class TripletClustering(ClusterMixin, BaseEstimator):
         w, U = eigh(L, subset_by_index=[n - C, n - 1])
         return KMeans(C, n_init=10, random_state=rng).fit_predict(normalize(U))
 
-    def fit(self, V, triplets=None):
+    def fit(self, V, triplets=None, affinity=None):
+        """V: (n, d) features; triplets: (t, 3) indices (a, b, c), b closer to a than c is;
+        affinity: an (n, n) graph of the same samples (dense or sparse) for the spectral start,
+        instead of the kNN graph of the weighted features."""
         V = _check_features(V, "V")
         n = V.shape[0]
         C = int(self.n_clusters)
@@ -418,7 +435,7 @@ class TripletClustering(ClusterMixin, BaseEstimator):
             X = V
             self.metric_weights_ = None
         if C > 1:
-            lab0 = self._spectral_init(X, same, diff, C, rng)
+            lab0 = self._spectral_init(X, same, diff, C, rng, affinity)
         else:
             lab0 = np.zeros(n, dtype=int)
             self.graph_ = None
@@ -480,8 +497,8 @@ class TripletClustering(ClusterMixin, BaseEstimator):
         self.n_iter_ = n_iter
         return self
 
-    def fit_predict(self, V, triplets=None):
-        return self.fit(V, triplets).labels_
+    def fit_predict(self, V, triplets=None, affinity=None):
+        return self.fit(V, triplets, affinity).labels_
 
 
 # ---------------------------------------------------------------------------------------------

@@ -28,7 +28,9 @@ stable) but each stage is made to hold on collections it was not tuned on:
 * labels start the graph's cut from the labelled shapes (seeded k-means), or, where
   leave-one-out says it predicts held-out labels better, decide which features matter first
   (a discriminant fitted to the labelled shapes);
-  triplets constrain the graph's clustering (eq. 3);
+  triplets constrain the graph's clustering (eq. 3), whose spectral start is the style graph
+  itself with the constraints imposed (a 7-nearest graph rebuilt on its spectral coordinates
+  moved with the load route: README, Generalisation);
 * reselection keeps the words that discriminate the clusters; the next round's graph is the
   mean of the first round's (every word) and the graph of the kept words' views. Replacing the
   graph by the kept words' let a few shapes moved by redrawn pixels move the words kept, and
@@ -320,9 +322,9 @@ def _label_metric_graph(a: np.ndarray, features: np.ndarray, y: np.ndarray) -> n
 def _cluster(a, features, params, y, trip, n_clusters):
     """(clusters, confidence, n_clusters, spectral coordinates) in the mode the constraints ask
     for, from the fused style graph `a` (and, with labels, the shapes' style features). Only
-    the triplet clustering reads the coordinates every round; the other modes return None for
-    them, and the unsupervised cut None for its confidence: both come from the last round's
-    coordinates (`_soft_confidence`), which only that round needs."""
+    the triplet clustering is given the coordinates every round (as its features; its start
+    and similarity come from `a`); the other modes return None for them, and the unsupervised cut None for its confidence: both come
+    from the last round's coordinates (`_soft_confidence`), which only that round needs."""
     rs = params.random_state
     if y is not None:
         n_cls = int(y.max()) + 1
@@ -334,7 +336,7 @@ def _cluster(a, features, params, y, trip, n_clusters):
         from .clustering import TripletClustering
         model_t = TripletClustering(n_clusters=n_clusters, random_state=rs)
         coords = _coordinates(a, params)
-        raw = np.asarray(model_t.fit_predict(coords, trip))
+        raw = np.asarray(model_t.fit_predict(coords, trip, affinity=a))
         memb = np.asarray(model_t.membership_, np.float64)
         conf = memb[np.arange(len(raw)), raw] / np.maximum(memb.sum(axis=1), 1e-12)
         clusters = _relabel_by_appearance(raw)

@@ -103,6 +103,21 @@ def test_triplet_clustering_without_triplets_is_plain_clustering():
     assert adjusted_rand_score(y, labels) > 0.9
 
 
+def test_triplet_clustering_starts_from_the_graph_it_is_given():
+    """The analysis passes its style graph: the spectral start reads that graph, not a kNN graph
+    of the features; a graph of the wrong size is refused."""
+    from scipy import sparse
+    V, cat, sty = competing_features(0)
+    rng = np.random.RandomState(0)
+    noise = rng.uniform(0, 0.2, (sty.size, sty.size))
+    graph = sparse.csr_matrix(np.where(sty[:, None] == sty[None, :], 0.8, 0.0) + noise)
+    own = TripletClustering(3, random_state=0).fit_predict(V, None)
+    given = TripletClustering(3, random_state=0).fit_predict(V, None, affinity=graph)
+    assert purity(sty, given) > 0.95 > purity(sty, own) + 0.1, (purity(sty, given), purity(sty, own))
+    with pytest.raises(ValueError, match="affinity"):
+        TripletClustering(3, random_state=0).fit(V, None, affinity=np.eye(5))
+
+
 def test_style_distance_and_triplet_prediction():
     V = np.array([[1.0, 0.0], [2.0, 0.1], [0.0, 1.0], [0.1, 3.0]])
     D = style_distance(V)
