@@ -144,6 +144,51 @@ def test_later_rounds_refine_the_all_words_graph_rather_than_replace_it(collecti
         np.testing.assert_allclose(later, 0.5 * (built[0] + own))
 
 
+def test_the_labels_reading_is_chosen_in_the_first_round_and_kept(collection, monkeypatch):
+    """Which reading of the labels to use (the graph's own cut, the seeded cut or the label
+    metric) is chosen once, as the automatic k is: a choice made again every round flipped with
+    small moves of the graph, and the result with it."""
+    from style_coanalysis import pipeline
+    given = []
+    transduction = pipeline._label_transduction
+
+    def recording(*args, **kwargs):
+        out = transduction(*args, **kwargs)
+        given.append((args[5] if len(args) > 5 else kwargs.get("reading"), out[2]))
+        return out
+
+    monkeypatch.setattr(pipeline, "_label_transduction", recording)
+    result = analyse(collection[0], PARAMS, labels=_labels(collection))
+    assert len(result.rounds) >= 2 and len(given) == len(result.rounds)
+    assert given[0][0] is None and given[0][1] in ("own", "seeded", "metric")
+    assert all(asked == used == given[0][1] for asked, used in given[1:])
+
+
+def test_the_labels_name_a_cut_the_same_whatever_its_cluster_numbers(monkeypatch):
+    """Labels that place equally many labelled shapes whichever of two namings is taken: the
+    naming comes from the graph (each cluster named after the labelled shapes it is most tied
+    to), not from the cut's cluster numbers, which a 1e-7 change of coordinates can permute."""
+    from style_coanalysis import graph, pipeline
+    group = np.repeat([0, 1, 2], 20)
+    a = np.where(group[:, None] == group[None, :], 0.5, 0.01)
+    a[20, group == 1] = a[group == 1, 20] = 0.9      # strongly tied to group 1
+    a[21, group == 1] = a[group == 1, 21] = 0.2      # weakly
+    a[40, group == 2] = a[group == 2, 40] = 0.9
+    a[41, group == 2] = a[group == 2, 41] = 0.2
+    y = np.full(60, -1)
+    y[[0, 1]] = 2                  # group 0: both of style 2
+    y[[20, 41]] = 0                # style 0: strongly in group 1, weakly in group 2
+    y[[40, 21]] = 1                # style 1: strongly in group 2, weakly in group 1 (a tie in
+                                   # counts: each of groups 1, 2 holds one label of each)
+    cut = group.copy()
+    named = []
+    for perm in ([0, 1, 2], [0, 2, 1], [1, 0, 2], [2, 1, 0]):
+        monkeypatch.setattr(graph, "partition", lambda *args, p=perm: np.asarray(p)[cut])
+        named.append(pipeline._named_cut(a, y, 3).tolist())
+    assert all(n == named[0] for n in named[1:]), named
+    assert named[0] == np.array([2, 0, 1])[group].tolist()
+
+
 def test_cancel_and_bad_constraints_stop_before_work(collection):
     drawings, _, _ = collection
     calls = []
@@ -312,7 +357,7 @@ def test_labels_the_unsupervised_cut_honours_change_only_its_names():
         m = np.flatnonzero(own == c)
         far = np.argsort(-np.linalg.norm(coords[m] - coords[m].mean(axis=0), axis=1))[:2]
         y[m[far]] = styles[c]
-    classes, _ = _label_transduction(a, x, y, 4, 0)
+    classes, _, _ = _label_transduction(a, x, y, 4, 0)
     assert classes.tolist() == styles[own].tolist()
     seeded = _seeded_cut(coords, y, 4)
     assert not np.array_equal(seeded, styles[own])  # the seeded cut alone moves some shapes
@@ -331,9 +376,9 @@ def test_labels_place_the_centres_and_name_the_clusters_whatever_the_order():
     y = np.full(60, -1)
     for g in range(3):
         y[np.flatnonzero(group == g)[:2]] = style_of_group[g]
-    classes, dist = _label_transduction(graph.affinity(x), x, y, 3)
+    classes, dist, _ = _label_transduction(graph.affinity(x), x, y, 3)
     assert classes.tolist() == style_of_group[group].tolist()
     assert np.allclose(dist.sum(axis=1), 1.0)
     order = rng.permutation(60)
-    again, _ = _label_transduction(graph.affinity(x[order]), x[order], y[order], 3)
+    again, _, _ = _label_transduction(graph.affinity(x[order]), x[order], y[order], 3)
     assert again.tolist() == classes[order].tolist()
