@@ -67,6 +67,11 @@ def main(argv=None) -> int:
     ap.add_argument("--stability-seeds", type=int, default=1,
                     help="stability over the first N seeds (each variant: one analysis per mode "
                          "and seed)")
+    ap.add_argument("--stability-modes", nargs="+", default=list(B.STABILITY_MODES),
+                    choices=B.MODES, metavar="MODE",
+                    help="the modes whose partitions the stability checks compare (default: "
+                    + " ".join(B.STABILITY_MODES) + "; with labels or triplets every variant "
+                    "gets the same ones)")
     ap.add_argument("--renderer", default=B.DRAWING_SETTINGS.renderer,
                     choices=("freestyle", "lineart", "zbuffer"),
                     help="what draws the collections (default %(default)s)")
@@ -107,6 +112,7 @@ def main(argv=None) -> int:
     # saved after every collection, so a long run that is stopped keeps what it measured
     results = B.evaluate(collections, modes, methods, args.seeds, stability=not args.no_stability,
                          render_stability=render, stability_seeds=args.stability_seeds,
+                         stability_modes=args.stability_modes,
                          jobs=args.jobs, on_collection=save, renderer=args.renderer)
     save(results, complete=True)
     print(B.summary_table(results))

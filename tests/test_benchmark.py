@@ -161,6 +161,40 @@ def test_loop_stability_and_table_with_a_stand_in_analysis():
     assert "order-0" in table and "| 1.00 / 1.00 | 1.00 / 1.00 |" in table
 
 
+def test_stability_in_a_label_mode_gives_every_order_the_same_labels():
+    """Stability in a constrained mode: the shuffled orders get the labels the collection's own
+    order drew (by name), so the ARI compares the analysis, not two draws of labels."""
+    from style_coanalysis.meshes import Mesh
+    st, ca = _pool(per_cell=2, styles=("a", "b"), cats=("x", "y", "z"))
+    n = len(st)
+    rng = np.random.default_rng(0)
+
+    class D:
+        def __init__(self, name):
+            self.name = name
+            self.images = rng.random((2, 16, 16)).astype(np.float32)
+
+    drawings = [D(f"s{i}") for i in range(n)]
+    tetra = np.array([[0, 1, 2], [0, 3, 1], [0, 2, 3], [1, 3, 2]])
+    meshes = [Mesh(d.name, rng.random((4, 3)), tetra) for d in drawings]
+    coll = B.Collection("fake", "fake", meshes, drawings, np.zeros((n, 1)),
+                        {"style": st, "category": ca})
+    given = []
+
+    def labelled_first(ds, params, labels, triplets, maps):
+        given.append((params.random_state, labels))     # the labelled shapes form cluster 0
+        return np.array([0 if d.name in labels else 1 for d in ds])
+
+    res = B.evaluate([coll], modes=["labels-2"], methods=["default"], seeds=1,
+                     analyse_fn=labelled_first, render_stability=(),
+                     stability_modes=["labels-2"], log=lambda m: None)
+    stab = res["collections"]["fake"]["stability"]
+    assert stab["modes"] == ["labels-2"] and stab["min_labels-2"] == pytest.approx(1.0)
+    runs = [lab for seed, lab in given if seed == 0]
+    assert len(runs) == 1 + B.STABILITY_ORDERS and all(lab == runs[0] for lab in runs)
+    assert "| fake | labels-2 | 1.00 |" in B.summary_table(res)
+
+
 def test_collection_names_and_prefixes():
     names = B.select_collections(["sample-1", "hu2017-60"])
     assert names == ["sample-120", "hu2017-60-0", "hu2017-60-1", "hu2017-60-2", "hu2017-60-3",

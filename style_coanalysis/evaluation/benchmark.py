@@ -62,6 +62,7 @@ SCALE = 1.0000001                        # stability: a 1e-7 relative change of 
 MODES = ("k", "auto", "labels-2", "labels-10%", "labels-20%", "triplets-50", "triplets-300")
 METHODS = ("default", "paper")
 STABILITY_ORDERS = 3
+STABILITY_MODES = ("auto", "k")        # the modes stability_for checks unless told others
 RENDER_VARIANTS = ("scaled", "obj", "blend")
 QUICK_COLLECTIONS = ("sample-120", "sample-styles-2", "sample-24", "hu2017-60-0", "collection2")
 QUICK_MODES = ("k", "auto", "labels-2", "labels-20%")
@@ -448,12 +449,12 @@ _PAPER_STATE = {"identical_to_default": False}
 
 
 def _run_one(coll, mode, method, seed, analyse_fn, drawings=None, maps=None):
-    """(clusters or None, error text or None, seconds, result object)."""
+    """(clusters or None, error text or None, seconds, result object). `drawings`: the
+    collection's shapes in another order or drawn another way (stability); the constraints are
+    drawn in the collection's own order and given by name, so every variant gets the same."""
     drawings = coll.drawings if drawings is None else drawings
     maps = coll.maps if maps is None else maps
-    names = [d.name for d in drawings]
-    styles = np.array([dict(zip(coll.names, coll.truth["style"]))[n] for n in names])
-    k, labels, triplets, idx = constraints_for(mode, styles, names, seed)
+    k, labels, triplets, _ = constraints_for(mode, coll.truth["style"], coll.names, seed)
     params = AnalysisParams(method=method, n_clusters=k, random_state=int(seed))
     t = time.perf_counter()
     try:
@@ -466,7 +467,8 @@ def _run_one(coll, mode, method, seed, analyse_fn, drawings=None, maps=None):
 
 def evaluate(collections, modes: Sequence[str] = MODES, methods: Sequence[str] = METHODS,
              seeds=3, analyse_fn=None, stability: bool = True, render_stability=None,
-             stability_seeds: int = 1, jobs: int = 0, log: Log = _stderr,
+             stability_seeds: int = 1, stability_modes: Sequence[str] = STABILITY_MODES,
+             jobs: int = 0, log: Log = _stderr,
              on_collection: Callable[[dict], None] | None = None,
              renderer: str = DRAWING_SETTINGS.renderer) -> dict:
     """Score every (collection, mode, method, seed); baselines, chance and stability beside.
@@ -474,7 +476,7 @@ def evaluate(collections, modes: Sequence[str] = MODES, methods: Sequence[str] =
     `collections`: names (loaded here) or `Collection`s. `seeds`: a count or a list.
     `analyse_fn(drawings, params, labels, triplets, maps)` returns an AnalysisResult (or the
     cluster array); default `pipeline.analyse`. `stability`: ARI between partitions of the
-    default method (auto k and k given) under 3 shuffled orders, and, for the collections named
+    default method (in each of `stability_modes`) under 3 shuffled orders, and, for the collections named
     in `render_stability` (None: RENDER_STABILITY_DEFAULT, True: all), under coordinates
     scaled by 1.0000001 and loaded from OBJ files and from a .blend (new renders); over the
     first `stability_seeds` seeds (each variant costs one analysis per mode and seed).
@@ -547,7 +549,8 @@ def evaluate(collections, modes: Sequence[str] = MODES, methods: Sequence[str] =
         if stability:
             do_render = render_stability is True or coll.name in tuple(render_stability)
             entry["stability"] = stability_for(coll, seeds[:max(1, stability_seeds)], fn,
-                                               partitions, do_render, jobs, log, settings)
+                                               partitions, do_render, jobs, log, settings,
+                                               stability_modes)
         for key in list(partitions):
             partitions[key] = None
         entry["seconds_total"] = time.perf_counter() - t_all
@@ -635,11 +638,13 @@ def _variant_through_blender(meshes, kind: str, workdir: str):
 
 def stability_for(coll: Collection, seeds, analyse_fn, partitions: dict, render: bool,
                   jobs: int = 0, log: Log = _stderr,
-                  settings: DrawingSettings = DRAWING_SETTINGS) -> dict:
-    """ARI of the default method's partition (auto k, k given) under each variant, per seed;
+                  settings: DrawingSettings = DRAWING_SETTINGS,
+                  modes: Sequence[str] = STABILITY_MODES) -> dict:
+    """ARI of the default method's partition in each of `modes` under each variant, per seed;
     beside them, as a yardstick, the ARI with the next analysis seed on the same drawings (how
-    much the partition moves with the method's own random choices): not counted as a variant."""
-    modes = ("auto", "k")
+    much the partition moves with the method's own random choices): not counted as a variant.
+    A mode with labels or triplets gives every variant the same constraints (by name)."""
+    modes = tuple(modes)
     ref = {}
     for mode in modes:
         for seed in seeds:
@@ -660,14 +665,15 @@ def stability_for(coll: Collection, seeds, analyse_fn, partitions: dict, render:
                         float(metrics.ari(pred, ref[mode, seed])))
         good = [a for a in aris if a is not None]
         yardstick[mode] = {"ari": aris, "min": float(np.min(good)) if good else None}
-    log(f"  stability yardstick, another analysis seed: ARI auto "
-        f"{_fmt(yardstick['auto']['min'])}, k {_fmt(yardstick['k']['min'])}")
+    log("  stability yardstick, another analysis seed: ARI " +
+        ", ".join(f"{m} {_fmt(yardstick[m]['min'])}" for m in modes))
     variants = {}
     n = len(coll.drawings)
     for i in range(STABILITY_ORDERS):
         perm = np.random.default_rng(7000 + i).permutation(n)
         variants[f"order-{i}"] = ([coll.drawings[j] for j in perm], coll.maps[perm])
-    out = {"variants": {}, "render_variants": render, "another_seed": yardstick}
+    out = {"modes": list(modes), "variants": {}, "render_variants": render,
+           "another_seed": yardstick}
     if render:
         with tempfile.TemporaryDirectory(prefix="style_bench_") as work:
             for kind in RENDER_VARIANTS:
@@ -697,8 +703,8 @@ def stability_for(coll: Collection, seeds, analyse_fn, partitions: dict, render:
             rows[mode] = {"ari": aris, "mean": float(np.mean(good)) if good else None,
                           "min": float(np.min(good)) if good else None}
         out["variants"][kind] = rows
-        log(f"  stability {kind:8s} ARI auto min {_fmt(rows['auto']['min'])}, "
-            f"k min {_fmt(rows['k']['min'])}")
+        log(f"  stability {kind:8s} ARI min " +
+            ", ".join(f"{m} {_fmt(rows[m]['min'])}" for m in modes))
     for mode in modes:
         vals = [v for r in out["variants"].values() if mode in r for v in r[mode]["ari"]
                 if v is not None]
@@ -771,13 +777,19 @@ def summary_table(results: dict) -> str:
     if stab:
         kinds = [f"order-{i}" for i in range(STABILITY_ORDERS)] + list(RENDER_VARIANTS)
         lines += ["", "Stability: ARI between the default method's partitions (minimum over "
-                  "seeds), auto k / k given; order-i = same shapes in a shuffled list, scaled = "
+                  "seeds), in the modes named on the row (auto = automatic k, k = k given; "
+                  "labels and triplets the same for every variant); order-i = same shapes in "
+                  "a shuffled list, scaled = "
                   "coordinates x 1.0000001, obj / blend = written and read back through the "
                   "Blender adapter (new renders); another seed = the next analysis seed on the "
                   "same drawings (a yardstick, not in worst).", "",
-                  "| collection | " + " | ".join(kinds) + " | worst | another seed |",
-                  "|---|" + "---|" * (len(kinds) + 2)]
+                  "| collection | modes | " + " | ".join(kinds) + " | worst | another seed |",
+                  "|---|---|" + "---|" * (len(kinds) + 2)]
         for name, s in stab.items():
+            modes = s.get("modes", list(STABILITY_MODES))
+
+            def per_mode(r, key="min"):
+                return " / ".join(_fmt(r[m][key], 2) if m in r else "-" for m in modes)
             cells = []
             for kind in kinds:
                 r = s["variants"].get(kind)
@@ -786,12 +798,11 @@ def summary_table(results: dict) -> str:
                 elif "n/a" in r:
                     cells.append("n/a")
                 else:
-                    cells.append(f"{_fmt(r['auto']['min'], 2)} / {_fmt(r['k']['min'], 2)}")
+                    cells.append(per_mode(r))
             seed = s.get("another_seed")
-            other = (f"{_fmt(seed['auto']['min'], 2)} / {_fmt(seed['k']['min'], 2)}" if seed
-                     else "-")
-            lines.append(f"| {name} | " + " | ".join(cells) +
-                         f" | {_fmt(s['min_auto'], 2)} / {_fmt(s['min_k'], 2)} | {other} |")
+            worst = " / ".join(_fmt(s.get(f"min_{m}"), 2) for m in modes)
+            lines.append(f"| {name} | {' / '.join(modes)} | " + " | ".join(cells) +
+                         f" | {worst} | {per_mode(seed) if seed else '-'} |")
     return "\n".join(lines)
 
 
