@@ -112,8 +112,8 @@ def test_summarise_mean_and_std():
     assert s["nmi"]["mean"] == pytest.approx(0.2)
 
 
-def test_loop_stability_and_table_with_a_stand_in_analysis():
-    """The loop end to end on a hand-made Collection with a stand-in analysis (no rendering)."""
+def _fake_collection():
+    """A hand-made Collection of 12 shapes in styles a and b (random drawings, no rendering)."""
     from style_coanalysis.meshes import Mesh
     st, ca = _pool(per_cell=2, styles=("a", "b"), cats=("x", "y", "z"))
     n = len(st)
@@ -127,9 +127,14 @@ def test_loop_stability_and_table_with_a_stand_in_analysis():
     drawings = [D(f"s{i}") for i in range(n)]
     tetra = np.array([[0, 1, 2], [0, 3, 1], [0, 2, 3], [1, 3, 2]])
     meshes = [Mesh(d.name, rng.random((4, 3)), tetra) for d in drawings]
-    coll = B.Collection("fake", "fake", meshes, drawings, np.zeros((n, 1)),
+    return B.Collection("fake", "fake", meshes, drawings, np.zeros((n, 1)),
                         {"style": st, "category": ca})
-    truth_by_name = dict(zip(coll.names, st))
+
+
+def test_loop_stability_and_table_with_a_stand_in_analysis():
+    """The loop end to end on a hand-made Collection with a stand-in analysis (no rendering)."""
+    coll = _fake_collection()
+    truth_by_name = dict(zip(coll.names, coll.truth["style"]))
     seen = []
 
     def oracle(ds, params, labels, triplets, maps):
@@ -164,21 +169,7 @@ def test_loop_stability_and_table_with_a_stand_in_analysis():
 def test_stability_in_a_label_mode_gives_every_order_the_same_labels():
     """Stability in a constrained mode: the shuffled orders get the labels the collection's own
     order drew (by name), so the ARI compares the analysis, not two draws of labels."""
-    from style_coanalysis.meshes import Mesh
-    st, ca = _pool(per_cell=2, styles=("a", "b"), cats=("x", "y", "z"))
-    n = len(st)
-    rng = np.random.default_rng(0)
-
-    class D:
-        def __init__(self, name):
-            self.name = name
-            self.images = rng.random((2, 16, 16)).astype(np.float32)
-
-    drawings = [D(f"s{i}") for i in range(n)]
-    tetra = np.array([[0, 1, 2], [0, 3, 1], [0, 2, 3], [1, 3, 2]])
-    meshes = [Mesh(d.name, rng.random((4, 3)), tetra) for d in drawings]
-    coll = B.Collection("fake", "fake", meshes, drawings, np.zeros((n, 1)),
-                        {"style": st, "category": ca})
+    coll = _fake_collection()
     given = []
 
     def labelled_first(ds, params, labels, triplets, maps):
