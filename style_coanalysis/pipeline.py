@@ -352,11 +352,11 @@ def _cluster(a, features, params, y, trip, n_clusters, reading=None):
     """(clusters, confidence, n_clusters, spectral coordinates, reading of the labels) in the
     mode the constraints ask for, from the fused style graph `a` (and, with labels, the
     shapes' style features). `reading`: the labels' reading to use (`_label_transduction`;
-    None: choose one, and return it; None without labels). Only the triplet clustering is
-    given the coordinates every round (as its features; its start and similarity come from
-    `a`); the other modes return None for them, and the unsupervised cut None for its
-    confidence: both come from the last round's coordinates (`_soft_confidence`), which only
-    that round needs."""
+    None: choose one, and return it; None without labels). Only the triplet clustering
+    returns the coordinates every round (its estimator takes them as its samples; its start
+    and similarity come from `a`); the other modes return None for them, and the
+    unsupervised cut None for its confidence: both come from the last round's coordinates
+    (`_soft_confidence`), which only that round needs."""
     rs = params.random_state
     if y is not None:
         n_cls = int(y.max()) + 1
@@ -366,7 +366,8 @@ def _cluster(a, features, params, y, trip, n_clusters, reading=None):
         return clusters, np.clip(conf, 0, 1), n_cls, None, reading
     if trip is not None:
         from .clustering import TripletClustering
-        model_t = TripletClustering(n_clusters=n_clusters, random_state=rs)
+        # given the style graph it reads no feature metric: none is learned
+        model_t = TripletClustering(n_clusters=n_clusters, random_state=rs, metric=False)
         coords = _coordinates(a, params)
         raw = np.asarray(model_t.fit_predict(coords, trip, affinity=a))
         memb = np.asarray(model_t.membership_, np.float64)

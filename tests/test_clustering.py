@@ -113,7 +113,8 @@ def test_triplet_clustering_starts_from_the_graph_it_is_given():
     graph = sparse.csr_matrix(np.where(sty[:, None] == sty[None, :], 0.8, 0.0) + noise)
     own = TripletClustering(3, random_state=0).fit_predict(V, None)
     given = TripletClustering(3, random_state=0).fit_predict(V, None, affinity=graph)
-    assert purity(sty, given) > 0.95 > purity(sty, own) + 0.1, (purity(sty, given), purity(sty, own))
+    assert purity(sty, given) > 0.95 > purity(sty, own) + 0.1, \
+        (purity(sty, given), purity(sty, own))
     with pytest.raises(ValueError, match="affinity"):
         TripletClustering(3, random_state=0).fit(V, None, affinity=np.eye(5))
 

@@ -476,10 +476,11 @@ def evaluate(collections, modes: Sequence[str] = MODES, methods: Sequence[str] =
     `collections`: names (loaded here) or `Collection`s. `seeds`: a count or a list.
     `analyse_fn(drawings, params, labels, triplets, maps)` returns an AnalysisResult (or the
     cluster array); default `pipeline.analyse`. `stability`: ARI between partitions of the
-    default method (in each of `stability_modes`) under 3 shuffled orders, and, for the collections named
-    in `render_stability` (None: RENDER_STABILITY_DEFAULT, True: all), under coordinates
-    scaled by 1.0000001 and loaded from OBJ files and from a .blend (new renders); over the
-    first `stability_seeds` seeds (each variant costs one analysis per mode and seed).
+    default method (in each of `stability_modes`) under 3 shuffled orders, and, for the
+    collections named in `render_stability` (None: RENDER_STABILITY_DEFAULT, True: all), under
+    coordinates scaled by 1.0000001 and loaded from OBJ files and from a .blend (new renders);
+    over the first `stability_seeds` seeds (each variant costs one analysis per mode and
+    seed).
     `on_collection(results_so_far)` is called after each collection (to save partial results).
     `renderer` draws the collections (and the stability variants) named here.
     Returns a JSON-ready dict; `summary_table` turns it into Markdown."""
