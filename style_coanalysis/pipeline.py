@@ -259,7 +259,8 @@ def _label_transduction(a: np.ndarray, features: np.ndarray, y: np.ndarray, n_cl
     spreading the labels over the graph (sklearn's LabelSpreading) was below the named
     partition on most collections."""
     lab = np.flatnonzero(y >= 0)
-    coords = _unit_coordinates(a, n_classes)
+    # the graph's own spectral coordinates: only choosing a reading and the seeded cut read them
+    coords = _unit_coordinates(a, n_classes) if reading in (None, "seeded") else None
 
     def by_metric(yy):
         g = _label_metric_graph(a, features, yy)
