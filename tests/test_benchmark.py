@@ -235,6 +235,34 @@ def test_merged_runs_take_each_method_from_the_latest_run_that_has_it():
     assert merged["auto"]["default"] == {"n/a": "failed"}                  # new mode, as it came
 
 
+def test_a_one_seed_stability_run_keeps_the_three_seed_figures_and_brings_its_stability():
+    def row(value, n):
+        stat = {"mean": value, "std": 0.0}
+        return {"summary": {"purity": stat, "nmi": stat, "category_purity": stat},
+                "runs": [{"n_clusters": 2}] * n}
+
+    def run(value, n, commit, stability=None):
+        e = {"n_shapes": 4, "n_styles": 2, "chance": 0.5,
+             "baselines": {"line statistics": row(value, n), "global shape": row(value, n)},
+             "modes": {"k": {"default": row(value, n)}}}
+        if stability:
+            e["stability"] = stability
+        return {"settings": {"seeds": list(range(n))}, "code": {"commit": commit},
+                "collections": {"c": e}}
+    quality = run(0.8, 3, "aaa", {"modes": ["k"], "variants": {}})
+    stab = run(0.5, 1, "bbb", {"modes": ["k"], "variants": {}, "min_k": 0.9})
+    merged = B.merge_results([quality, stab])
+    c = merged["collections"]["c"]
+    assert c["modes"]["k"]["default"]["summary"]["purity"]["mean"] == 0.8
+    assert c["baselines"]["line statistics"]["summary"]["purity"]["mean"] == 0.8
+    assert c["stability"]["min_k"] == 0.9 and c["stability"]["commit"] == "bbb"
+    assert merged["settings"]["seeds"] == [0, 1, 2]
+    assert "| bbb |" in B.summary_table(merged).splitlines()[-1]
+    # a later run on as many seeds does replace
+    later = B.merge_results([quality, run(0.7, 3, "ccc")])["collections"]["c"]
+    assert later["modes"]["k"]["default"]["summary"]["purity"]["mean"] == 0.7
+
+
 def test_hu2017_pairs_are_every_two_style_make_up(monkeypatch):
     """hu2017-styles-2-0..5: each of the six pairs of the four styles once, 60 shapes, 30 per
     style spread evenly over the five categories."""

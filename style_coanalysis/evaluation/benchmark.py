@@ -716,17 +716,32 @@ def stability_for(coll: Collection, seeds, analyse_fn, partitions: dict, render:
 # ------------------------------------------------------------------ reporting
 def merge_results(runs: Sequence[dict]) -> dict:
     """Several runs' results as one: per collection, mode and method the latest run that has
-    it (runs in order), its baselines and stability likewise; settings of the last run."""
+    it on at least as many seeds (a one-seed stability run does not replace a mean over three),
+    its baselines likewise; the latest stability, marked with the commit it was measured on;
+    settings of the last run, but the most seeds any run had."""
+    def n_runs(entry) -> int:
+        return len(entry.get("runs", ())) if isinstance(entry, dict) else 0
+
+    def replaces(new, old) -> bool:
+        return bool(new.get("summary")) and (old is None or n_runs(new) >= n_runs(old))
+
     out = {"settings": dict(runs[-1]["settings"]), "collections": {}, "skipped_collections": {}}
+    out["settings"]["seeds"] = max((r["settings"]["seeds"] for r in runs), key=len)
     for run in runs:
         out["skipped_collections"].update(run.get("skipped_collections", {}))
+        commit = run.get("code", {}).get("commit")
         for name, e in run["collections"].items():
-            into = out["collections"].setdefault(name, {**e, "modes": {}})
-            into.update({k: v for k, v in e.items() if k != "modes"})
+            into = out["collections"].setdefault(name, {**e, "modes": {}, "baselines": {}})
+            into.update({k: v for k, v in e.items() if k not in ("modes", "baselines")})
+            if "stability" in e:
+                into["stability"] = {**e["stability"], "commit": commit}
+            for b, row in e.get("baselines", {}).items():
+                if replaces(row, into["baselines"].get(b)):
+                    into["baselines"][b] = row
             for mode, row in e["modes"].items():
-                into["modes"].setdefault(mode, {}).update(
-                    {m: r for m, r in row.items() if r.get("summary") or m not in
-                     into["modes"].get(mode, {})})
+                have = into["modes"].setdefault(mode, {})
+                have.update({m: r for m, r in row.items() if replaces(r, have.get(m)) or
+                             (m not in have and not r.get("summary"))})
     for name in out["collections"]:
         out["skipped_collections"].pop(name, None)
     return out
@@ -750,7 +765,7 @@ def summary_table(results: dict) -> str:
     lines = [f"Style purity, mean ± std over {len(seeds)} seeds; baselines with k given "
              "(line statistics, global shape); chance = majority share. "
              "cat. = category purity of the default's / paper's result; k = clusters the "
-             "default found per seed; (x% named) = share of the shapes the labels or triplets "
+             "default found per seed (fewer seeds where it lists fewer); (x% named) = share of the shapes the labels or triplets "
              "name.", "",
              "| collection | N | styles | mode | default | paper | line stats | global shape | chance "
              "| default NMI | cat. | k |",
@@ -783,9 +798,11 @@ def summary_table(results: dict) -> str:
                   "a shuffled list, scaled = "
                   "coordinates x 1.0000001, obj / blend = written and read back through the "
                   "Blender adapter (new renders); another seed = the next analysis seed on the "
-                  "same drawings (a yardstick, not in worst).", "",
-                  "| collection | modes | " + " | ".join(kinds) + " | worst | another seed |",
-                  "|---|---|" + "---|" * (len(kinds) + 2)]
+                  "same drawings (a yardstick, not in worst); code = the commit the row was "
+                  "measured on (merged tables).", "",
+                  "| collection | modes | " + " | ".join(kinds) + " | worst | another seed "
+                  "| code |",
+                  "|---|---|" + "---|" * (len(kinds) + 3)]
         for name, s in stab.items():
             modes = s.get("modes", list(STABILITY_MODES))
 
@@ -803,7 +820,8 @@ def summary_table(results: dict) -> str:
             seed = s.get("another_seed")
             worst = " / ".join(_fmt(s.get(f"min_{m}"), 2) for m in modes)
             lines.append(f"| {name} | {' / '.join(modes)} | " + " | ".join(cells) +
-                         f" | {worst} | {per_mode(seed) if seed else '-'} |")
+                         f" | {worst} | {per_mode(seed) if seed else '-'} "
+                         f"| {s.get('commit') or '-'} |")
     return "\n".join(lines)
 
 
