@@ -80,11 +80,15 @@ def main(argv=None) -> int:
     ap.add_argument("--table", metavar="JSON", nargs="+", default=None,
                     help="only print the Markdown table of saved results (e.g. partial runs); "
                          "with several files, a method's figures in a later file replace the "
-                         "same collection and mode of an earlier one")
+                         "same collection and mode of an earlier one measured on no more seeds")
+    ap.add_argument("--goals", action="store_true",
+                    help="with --table: also print issue 11's goals read off the results")
     args = ap.parse_args(argv)
     if args.table:
-        print(B.summary_table(B.merge_results([json.loads(Path(f).read_text())
-                                               for f in args.table])))
+        merged = B.merge_results([json.loads(Path(f).read_text()) for f in args.table])
+        print(B.summary_table(merged))
+        if args.goals:
+            print("\n" + B.goal_report(merged))
         return 0
 
     collections = B.select_collections(args.collections or (B.QUICK_COLLECTIONS if args.quick else None))

@@ -263,6 +263,39 @@ def test_a_one_seed_stability_run_keeps_the_three_seed_figures_and_brings_its_st
     assert later["modes"]["k"]["default"]["summary"]["purity"]["mean"] == 0.7
 
 
+def test_the_goal_report_counts_what_the_issue_asks():
+    def row(purity, ari, ks=(2, 2, 2)):
+        return {"summary": {"purity": {"mean": purity}, "ari": {"mean": ari}},
+                "runs": [{"n_clusters": k} for k in ks]}
+
+    def coll(n_styles, modes, line=0.5, stability=None):
+        e = {"n_shapes": 40, "n_styles": n_styles, "modes": modes,
+             "baselines": {"line statistics": row(line, 0.1), "global shape": row(0.4, 0.0)}}
+        if stability:
+            e["stability"] = stability
+        return e
+    res = {"collections": {
+        "two": coll(2, {"k": {"default": row(0.92, 0.6), "paper": row(0.95, 0.7)},
+                        "labels-2": {"default": row(0.96, 0.7)},
+                        "auto": {"default": row(0.9, 0.5, (2, 3, 5)),
+                                 "paper": row(0.95, 0.2, (9, 9, 9))}},
+                    stability={"modes": ["k"], "variants": {"obj": {}}, "min_k": 0.93,
+                               "commit": "abc"}),
+        "four": coll(4, {"k": {"default": row(0.7, 0.3)}, "labels-2": {"default": row(0.6, 0.2)},
+                         "auto": {"default": row(0.45, 0.2, (4, 2, 4))}}, line=0.8)}}
+    lines = B.goal_report(res).splitlines()
+    assert lines[0].startswith("Rows below the paper or a trivial baseline (mean style purity): "
+                               "5 of 6")
+    assert "four k (line statistics)" in lines[0] and "two auto (paper)" in lines[0]
+    # the paper's 9 clusters raise its purity, not its ARI
+    assert lines[1] == "  of those, below by ARI too: 1: two k"
+    assert lines[2] == "2 labels per style at or above k given: 1 of 2; below: four 0.600 vs 0.700"
+    assert lines[3] == ("Automatic k right: 3 of 6 runs; at most N/4 clusters: 6 of 6; two-style "
+                        "collections given 2 or 3 clusters: 2 of 3")
+    assert lines[4] == "Stability two (obj; abc): below 0.95 in k 0.93"
+    assert lines[5].endswith("met here on: two")
+
+
 def test_hu2017_pairs_are_every_two_style_make_up(monkeypatch):
     """hu2017-styles-2-0..5: each of the six pairs of the four styles once, 60 shapes, 30 per
     style spread evenly over the five categories."""

@@ -825,6 +825,71 @@ def summary_table(results: dict) -> str:
     return "\n".join(lines)
 
 
+GOAL_STABILITY = 0.95                   # issue 11: ARI between variants' partitions
+GOAL_HELD_OUT = {"k": 0.9, "labels-2": 0.95}    # issue 11: purity on held-out collections
+
+
+def goal_report(results: dict) -> str:
+    """Issue 11's goals read off (merged) results, so the counts in notes come from a command:
+    rows where the default's mean style purity is below the paper's or a trivial baseline's
+    (and, beside, below by ARI, which unlike purity does not rise with the number of clusters),
+    2 labels per style against k given, the automatic k, stability and the held-out goal."""
+    def mean(s, key="purity"):
+        return s[key]["mean"] if s and key in s else None
+
+    rows, below, below_ari, two, auto, two_style, cap = 0, [], [], [], [], [], []
+    held = []
+    for name, e in results["collections"].items():
+        b = e["baselines"]
+        refs = {"paper": None, "line statistics": b["line statistics"]["summary"],
+                "global shape": b["global shape"]["summary"]}
+        for mode, row in e["modes"].items():
+            d = row.get("default", {}).get("summary")
+            if not d:
+                continue
+            rows += 1
+            refs["paper"] = row.get("paper", {}).get("summary")
+            worse = [r for r, s in refs.items() if s and mean(s) > mean(d) + 1e-9]
+            if worse:
+                below.append(f"{name} {mode} ({', '.join(worse)})")
+                if any(mean(refs[r], "ari") is not None and mean(refs[r], "ari") >
+                       mean(d, "ari") + 1e-9 for r in worse):
+                    below_ari.append(f"{name} {mode}")
+        k_row = e["modes"].get("k", {}).get("default", {}).get("summary")
+        l2 = e["modes"].get("labels-2", {}).get("default", {}).get("summary")
+        if k_row and l2:
+            two.append((name, mean(l2) >= mean(k_row) - 1e-9, mean(l2), mean(k_row)))
+        for r in e["modes"].get("auto", {}).get("default", {}).get("runs", []):
+            auto.append(r["n_clusters"] == e["n_styles"])
+            cap.append(r["n_clusters"] <= max(2, e["n_shapes"] // 4))
+            if e["n_styles"] == 2:
+                two_style.append(2 <= r["n_clusters"] <= 3)
+        if k_row and l2 and mean(k_row) >= GOAL_HELD_OUT["k"] and \
+                mean(l2) >= GOAL_HELD_OUT["labels-2"]:
+            held.append(name)
+    lines = [f"Rows below the paper or a trivial baseline (mean style purity): {len(below)} of "
+             f"{rows}" + (": " + "; ".join(below) if below else ""),
+             f"  of those, below by ARI too: {len(below_ari)}" +
+             (": " + "; ".join(below_ari) if below_ari else ""),
+             f"2 labels per style at or above k given: {sum(ok for _, ok, *_ in two)} of "
+             f"{len(two)}" + "".join(f"; below: {n} {a:.3f} vs {k:.3f}"
+                                     for n, ok, a, k in two if not ok),
+             f"Automatic k right: {sum(auto)} of {len(auto)} runs; at most N/4 clusters: "
+             f"{sum(cap)} of {len(cap)}; two-style collections given 2 or 3 clusters: "
+             f"{sum(two_style)} of {len(two_style)}"]
+    stab = {n: e["stability"] for n, e in results["collections"].items() if "stability" in e}
+    for name, st in stab.items():
+        worst = {m: st.get(f"min_{m}") for m in st.get("modes", STABILITY_MODES)}
+        miss = [f"{m} {v:.2f}" for m, v in worst.items() if v is not None and v < GOAL_STABILITY]
+        kinds = sorted(st.get("variants", {}))
+        lines.append(f"Stability {name} ({', '.join(kinds)}; {st.get('commit') or 'this run'}): "
+                     + (f"below {GOAL_STABILITY} in {', '.join(miss)}" if miss else
+                        f"at or above {GOAL_STABILITY} in every mode measured"))
+    lines.append(f"The held-out collections' goal (k given >= {GOAL_HELD_OUT['k']}, 2 labels "
+                 f">= {GOAL_HELD_OUT['labels-2']}) met here on: {', '.join(held) or 'none'}")
+    return "\n".join(lines)
+
+
 def plot(results: dict, path) -> None:
     """Per collection: style purity (mean, std bars) of default and paper per mode, the
     baselines (k given) and chance as horizontal lines."""
