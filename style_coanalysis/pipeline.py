@@ -57,7 +57,8 @@ from sklearn.preprocessing import normalize
 from . import graph
 from .constraints import labels_to_array, triplets_to_array, validate_labels, validate_triplets
 from .drawings import ShapeDrawings
-from .encoding import DescriptorDraw, FilterBank, frequency_features, shape_word_counts
+from .encoding import (DescriptorDraw, FilterBank, frequency_features, home_views,
+                       shape_word_counts)
 from .features import MapStore, hog_images, line_character
 from .hashing import uniform
 from .meshes import InputError
@@ -484,9 +485,10 @@ def encode(drawings, params: AnalysisParams, maps=None, progress=None) -> Encodi
             # not be at another); the layout words are drawn at the first size's seeds
             found = {size: extract_patches([d], size=size) for size in dict.fromkeys(sizes)}
             n_patches += len(found[sizes[0]])
+            home = home_views(d.seeds, d.n_views)
             for (word_draw, layout_draw), size in zip(draws, sizes):
                 for draw, p in ((word_draw, found[size]), (layout_draw, found[sizes[0]])):
-                    draw.add(m, i, d.name, p.view, p.seed, p.centre)
+                    draw.add(m, i, d.name, p.view, p.seed, p.centre, home)
             lines.append(line_character(m))
             timings["patches"] += time.perf_counter() - t
         if n_patches == 0:

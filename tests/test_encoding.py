@@ -214,6 +214,40 @@ def test_patch_keys_depend_on_place_and_salt_only():
     assert 0.4 < k.mean() < 0.6                  # spread over [0, 1)
 
 
+def test_a_shape_turned_by_whole_views_draws_the_same_patches():
+    """Turned about +Z by a multiple of the rig's 30 degrees, a shape is drawn in the same 12
+    drawings, in another order (view v's drawing becomes view v + 3 at 90 degrees): the
+    dictionary draw keeps the same patches, with the same keys, and so the same words."""
+    from style_coanalysis.encoding import DescriptorDraw, home_views
+    rng = np.random.default_rng(5)
+    maps = rng.random((12, 12, 12, 36)).astype(np.float32)
+    seeds = rng.normal(0, 0.5, (30, 3))
+    view = rng.integers(0, 12, 200)
+    seed = rng.integers(0, 30, 200)
+    centres = rng.uniform(20, 80, (200, 2)).astype(np.float32)
+
+    def drawn(turns):
+        a = turns * np.pi / 6
+        rot = np.array([[np.cos(a), -np.sin(a), 0], [np.sin(a), np.cos(a), 0], [0, 0, 1]])
+        d = DescriptorDraw(24, limit=50, salt=1)
+        d.add(np.roll(maps, turns, axis=0), 0, "chair", (view + turns) % 12, seed, centres,
+              home_views(seeds @ rot.T, 12))
+        keys, desc = (np.concatenate(c) for c in list(zip(*d._parts))[:2])
+        order = np.argsort(keys)
+        return keys[order], desc[order], d.bank(8, 0).hog
+
+    k0, d0, w0 = drawn(0)
+    for turns in (3, 1, 7):
+        k, d, w = drawn(turns)
+        np.testing.assert_array_equal(k, k0)
+        np.testing.assert_array_equal(d, d0)
+        np.testing.assert_array_equal(w, w0)
+    # keyed by the view itself (no home views), the turned shape draws other patches
+    plain = DescriptorDraw(24, limit=50, salt=1)
+    plain.add(np.roll(maps, 3, axis=0), 0, "chair", (view + 3) % 12, seed, centres)
+    assert not np.array_equal(np.sort(np.concatenate([p[0] for p in plain._parts])), k0)
+
+
 def test_the_key_driven_kmeans_start_follows_small_changes_and_spreads():
     """A few descriptors changed a little (lines redrawn by a pixel) leave the k-means++ start
     nearly as it was; it is a k-means++ start (spread out), and the seed changes it."""
