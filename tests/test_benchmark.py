@@ -296,6 +296,15 @@ def test_the_goal_report_counts_what_the_issue_asks():
     assert lines[5].endswith("met here on: two")
 
 
+def test_the_turned_variant_turns_every_shape_a_quarter_about_its_up_axis(tmp_path):
+    from style_coanalysis.meshes import Mesh
+    v = np.array([[1.0, 0.0, 0.0], [0.0, 2.0, 0.5], [-1.0, -1.0, 1.0]], np.float32)
+    (m,) = B.variant_meshes([Mesh("a", v, np.array([[0, 1, 2]]))], "turned", str(tmp_path))
+    assert m.name == "a" and np.array_equal(m.faces, [[0, 1, 2]])
+    np.testing.assert_array_equal(m.vertices, [[0, 1, 0], [-2, 0, 0.5], [1, -1, 1]])
+    assert "turned" in B.RENDER_VARIANTS
+
+
 def test_hu2017_pairs_are_every_two_style_make_up(monkeypatch):
     """hu2017-styles-2-0..5: each of the six pairs of the four styles once, 60 shapes, 30 per
     style spread evenly over the five categories."""

@@ -63,7 +63,7 @@ MODES = ("k", "auto", "labels-2", "labels-10%", "labels-20%", "triplets-50", "tr
 METHODS = ("default", "paper")
 STABILITY_ORDERS = 3
 STABILITY_MODES = ("auto", "k")        # the modes stability_for checks unless told others
-RENDER_VARIANTS = ("scaled", "obj", "blend")
+RENDER_VARIANTS = ("scaled", "obj", "blend", "turned")
 QUICK_COLLECTIONS = ("sample-120", "sample-styles-2", "sample-24", "hu2017-60-0", "collection2")
 QUICK_MODES = ("k", "auto", "labels-2", "labels-20%")
 # the render-based stability checks run on these by default (rendering costs ~1 s per shape/core)
@@ -608,11 +608,16 @@ def variant_meshes(meshes, kind: str, workdir: str):
     """The same shapes (a) scaled by 1.0000001, or written with the project's writers and read
     back as `python -m style_coanalysis analyze` reads its INPUT: (b) a folder of OBJ files
     (meshio.write_obj, then the Blender importer), (c) a .blend (scene.write_blend, as the `sample` command
-    writes its own, then the .blend reader)."""
+    writes its own, then the .blend reader); or (d) each turned by 90 degrees about +Z, the
+    up axis of every collection here (an asset facing +X rather than -Y: the same 12
+    drawings, in another order)."""
     from ..meshes import Mesh
     if kind == "scaled":
         return [Mesh(m.name, (m.vertices.astype(np.float64) * SCALE).astype(np.float32), m.faces,
                      m.source, m.truth) for m in meshes]
+    if kind == "turned":
+        return [Mesh(m.name, np.stack([-m.vertices[:, 1], m.vertices[:, 0], m.vertices[:, 2]],
+                                      axis=1), m.faces, m.source, m.truth) for m in meshes]
     from ..blender.render import quiet_fds
     with quiet_fds():          # Blender prints "Info: Saved ..." past sys.stdout
         return _variant_through_blender(meshes, kind, workdir)
@@ -797,7 +802,8 @@ def summary_table(results: dict) -> str:
                   "labels and triplets the same for every variant); order-i = same shapes in "
                   "a shuffled list, scaled = "
                   "coordinates x 1.0000001, obj / blend = written and read back through the "
-                  "Blender adapter (new renders); another seed = the next analysis seed on the "
+                  "Blender adapter (new renders), turned = every shape turned by 90 degrees "
+                  "about its up axis; another seed = the next analysis seed on the "
                   "same drawings (a yardstick, not in worst); code = the commit the row was "
                   "measured on (merged tables).", "",
                   "| collection | modes | " + " | ".join(kinds) + " | worst | another seed "
