@@ -770,8 +770,8 @@ def summary_table(results: dict) -> str:
     lines = [f"Style purity, mean ± std over {len(seeds)} seeds; baselines with k given "
              "(line statistics, global shape); chance = majority share. "
              "cat. = category purity of the default's / paper's result; k = clusters the "
-             "default found per seed (fewer seeds where it lists fewer); (x% named) = share of the shapes the labels or triplets "
-             "name.", "",
+             "default found per seed (fewer seeds where it lists fewer); (x% named) = share "
+             "of the shapes the labels or triplets name.", "",
              "| collection | N | styles | mode | default | paper | line stats | global shape | chance "
              "| default NMI | cat. | k |",
              "|---|---:|---:|---|---|---|---|---|---:|---|---|---|"]
