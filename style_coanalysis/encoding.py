@@ -31,15 +31,15 @@ with max pooling over the image and its quadrants, measured on the 120-shape sam
   0.67 -> 0.87 and lowered collection2-styles-2 0.58 -> 0.52. No one size holds everywhere,
   so the style graph fuses them, as it fuses the look-alike ladder's rungs (README,
   Generalisation: the five sizes against five 24 px dictionaries).
-* The dictionary is drawn by place (shape name, seed, view from the seed's side:
-  `patch_keys`), with k-means started by place too (`plusplus_by_key`): mini-batch k-means
-  and a positional random draw made one patch more or less change the whole dictionary, a draw by content did too, since
-  Freestyle redraws some lines by a pixel when the coordinates change by 1e-7 (98 of
-  sample-120's shapes), and so did k-means++'s usual start and Lloyd's steps run to
-  convergence (`LLOYD_STEPS`). With all three by place, a few Lloyd steps, and five
-  such dictionaries drawn with other seeds in one style graph (pipeline.encode), the file order
-  no longer matters (ARI 1.00) and x 1.0000001, OBJ and .blend keep ARI 0.82-1.00 (sample-120,
-  collection2, hu2017-all; README, Generalisation).
+* The dictionary is drawn by place (shape name, seed, view from the seed's side: `patch_keys`),
+  with k-means started by place too (`plusplus_by_key`): mini-batch k-means and a positional
+  random draw made one patch more or less change the whole dictionary, a draw by content did
+  too, since Freestyle redraws some lines by a pixel when the coordinates change by 1e-7 (98 of
+  sample-120's shapes), and so did k-means++'s usual start and Lloyd's steps run to convergence
+  (`LLOYD_STEPS`). With all three by place, a few Lloyd steps, and five such dictionaries drawn
+  with other seeds in one style graph (pipeline.encode), the file order no longer matters (ARI
+  1.00) and x 1.0000001, OBJ and .blend keep ARI 0.82-1.00 (sample-120, collection2, hu2017-all;
+  README, Generalisation).
 Vectorised as im2col: the windows of a batch of maps are gathered with a strided view and
 multiplied by the (unit) filter matrix in one product; no Python loop over positions.
 """
