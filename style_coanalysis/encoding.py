@@ -29,8 +29,8 @@ with max pooling over the image and its quadrants, measured on the 120-shape sam
   real hu2017 pairs (hu2017-styles-2-0 0.73 -> 0.82, -2-3 0.53 -> 0.62) and lowered generated
   collections (sample-24 0.79 -> 0.54, collection2 0.68 -> 0.57); 16 px raised sample-60
   0.67 -> 0.87 and lowered collection2-styles-2 0.58 -> 0.52. No one size holds everywhere,
-  so the style graph fuses them, as it fuses the look-alike ladder's rungs (README,
-  Generalisation: the five sizes against five 24 px dictionaries).
+  so the style graph fuses them, as it fuses the look-alike ladder's rungs
+  (docs/generalisation.md: the five sizes against five 24 px dictionaries).
 * The dictionary is drawn by place (shape name, seed, view from the seed's side: `patch_keys`),
   with k-means started by place too (`plusplus_by_key`): mini-batch k-means and a positional
   random draw made one patch more or less change the whole dictionary, a draw by content did
@@ -39,7 +39,7 @@ with max pooling over the image and its quadrants, measured on the 120-shape sam
   (`LLOYD_STEPS`). With all three by place, a few Lloyd steps, and five such dictionaries drawn
   with other seeds in one style graph (pipeline.encode), the file order no longer matters (ARI
   1.00) and x 1.0000001, OBJ and .blend keep ARI 0.82-1.00 (sample-120, collection2, hu2017-all;
-  README, Generalisation).
+  docs/generalisation.md).
 Vectorised as im2col: the windows of a batch of maps are gathered with a strided view and
 multiplied by the (unit) filter matrix in one product; no Python loop over positions.
 """
@@ -59,7 +59,7 @@ EPS = 1e-6
 # convergence (about 50 steps), Lloyd carried a change of 3 drawn descriptors of 20,000 (the
 # x 1.0000001 drawings of hu2017-all: a few pixels in 13 of 537 shapes) into 540 reassigned
 # descriptors and 17 of 200 other words, and the partition with k given to ARI 0.33; after 3
-# steps the words are the same and the ARI 0.98 (README, Generalisation).
+# steps the words are the same and the ARI 0.98 (docs/generalisation.md).
 LLOYD_STEPS = 3
 
 

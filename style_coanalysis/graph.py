@@ -29,7 +29,7 @@ automatic / 2 labels per style / 20% labels: every shape linked to all 11.76 / 1
 automatic k 11.13 and 11.11 against 11.05, 2 labels 12.67 and 12.65 against 12.49, 20% labels
 13.43 and 13.39 against 13.19. Ten nearest alone moved with the drawings: collection2 read
 back from .blend ARI 0.67 with k given (0.95 with 20), from OBJ with automatic k 0.69 (0.87),
-sample-120 from OBJ 0.82 (0.98); the ladder keeps them (README, "Generalisation"). Scales of
+sample-120 from OBJ 0.82 (0.98); the ladder keeps them (docs/generalisation.md). Scales of
 80 and 160 as well (for N above 160 and 320) cost 3x per shape at 5,000 shapes and scored lower
 on hu2017-all (537 shapes, k given 0.427 against 0.435, with the eight-rung look-alike ladder
 of then). The automatic k reads 40-nearest graphs

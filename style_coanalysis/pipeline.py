@@ -30,13 +30,13 @@ stable) but each stage is made to hold on collections it was not tuned on:
   (a discriminant fitted to the labelled shapes);
   triplets constrain the graph's clustering (eq. 3), whose spectral start is the style graph
   itself with the constraints imposed (a 7-nearest graph rebuilt on its spectral coordinates
-  moved with the load route: README, Generalisation);
+  moved with the load route: docs/generalisation.md);
 * reselection keeps the words that discriminate the clusters; the next round's graph is the
   mean of the first round's (every word) and the graph of the kept words' views. Replacing the
   graph by the kept words' let a few shapes moved by redrawn pixels move the words kept, and
   those the next cut, round after round (collection2 read back from OBJ, automatic k: ARI
   0.97 after the first round, 0.90 after five); kept beside the all-words graph, each round
-  moves the graph half as far (README, Generalisation: the worst ARI over the three routes,
+  moves the graph half as far (docs/generalisation.md: the worst ARI over the three routes,
   3 collections x 3 seeds x 2 modes, 0.92 -> 0.97 on average). The loop stops when neither
   clusters nor words change, on a repeated state, or after `params.max_rounds`.
 Every order-dependent step runs in a canonical order, so the file order does not change the
