@@ -241,7 +241,8 @@ def analysis_key(shape_digests: list[str], params: dict, labels: dict | None,
 
 _RESULT_ARRAYS = ("clusters", "fused", "confidence", "label_given", "view_weights", "words",
                   "word_cluster", "word_score")
-_RESULT_JSON = ("names", "n_clusters", "classes", "predicted", "view_names", "rounds", "timings")
+_RESULT_JSON = ("names", "n_clusters", "classes", "predicted", "view_names", "rounds", "timings",
+                "k_gaps")
 _FILTER_JSON = ("cluster", "view", "source_shape", "source_seed", "source_pixel", "score")
 
 
@@ -282,6 +283,8 @@ def result_from_arrays(arrays: dict):
     meta = json.loads(str(arrays["meta"]))
     values = {f: (None if f in meta["none"] else arrays[f]) for f in _RESULT_ARRAYS}
     values.update({f: meta[f] for f in _RESULT_JSON})
+    if values["k_gaps"] is not None:                    # JSON keys are text
+        values["k_gaps"] = {int(k): g for k, g in values["k_gaps"].items()}
     filters = []
     for i, sf in enumerate(meta["filters"]):
         sf["source_pixel"] = tuple(sf["source_pixel"])

@@ -33,7 +33,7 @@ sample-120 from OBJ 0.82 (0.98); the ladder keeps them (docs/generalisation.md).
 80 and 160 as well (for N above 160 and 320) cost 3x per shape at 5,000 shapes and scored lower
 on hu2017-all (537 shapes, k given 0.427 against 0.435, with the eight-rung look-alike ladder
 of then). The automatic k reads 40-nearest graphs
-(`pipeline._choose_n_clusters`; the ladder's graph instead: right on 15 of 51 runs, against
+(`pipeline._cluster_count_gaps`; the ladder's graph instead: right on 15 of 51 runs, against
 27). Only each shape's nearest are held, so memory grows with N, not N^2, and a view's graph
 costs the same per shape at any N but for the all-pairs search.
 
@@ -196,13 +196,17 @@ def partition(a, n_clusters: int, random_state: int = 0) -> np.ndarray:
     return kmeans(normalize(u), n_clusters, random_state)
 
 
-def choose_n_clusters(a, max_clusters: int) -> int:
-    """The number of clusters at the largest gap of the normalised affinity's spectrum (2..max).
-
-    Eigenvalue k of the normalised affinity is near 1 for each of k well-separated groups; the
-    first big drop after it marks how many there are."""
+def spectral_gaps(a, max_clusters: int) -> dict[int, float]:
+    """{k: the normalised affinity's spectral gap after eigenvalue k} for k = 2..max (at least
+    {2: 0.0}): how strongly the graph holds k groups. Eigenvalue k is near 1 for each of k
+    well-separated groups; the first big drop after it marks how many there are."""
     n = a.shape[0]
     top = int(max(2, min(max_clusters, n - 1)))
     w, _ = embedding(a, top + 1)
     gaps = w[1:top] - w[2:top + 1]          # gap after eigenvalue k, for k = 2..top
-    return int(np.argmax(gaps) + 2) if len(gaps) else 2
+    return {k + 2: float(g) for k, g in enumerate(gaps)} if len(gaps) else {2: 0.0}
+
+
+def choose_n_clusters(gaps: dict[int, float]) -> int:
+    """The number of clusters at the largest of `spectral_gaps` (the smallest such k on a tie)."""
+    return max(gaps, key=lambda k: (gaps[k], -k))

@@ -102,6 +102,8 @@ class AnalysisResult:
     words: np.ndarray | None = None          # (K, nb, nb, C) the whole dictionary (unit HOG)
     word_cluster: np.ndarray | None = None   # (K,) the cluster a word is a style filter of, or -1
     word_score: np.ndarray | None = None     # (K,) its discriminant score (-inf for other words)
+    # automatic k only: the spectral gap of every number of clusters allowed; the largest chose
+    k_gaps: dict[int, float] | None = None
 
 
 def _check_inputs(drawings, params, labels, triplets, fusion):
@@ -194,7 +196,7 @@ def _graphs(views, choice: bool = False) -> tuple[list, list | None]:
 
 def _style_graph(views, params, y, fusion, choice: bool = False):
     """The fused style graph (N, N), the weight of each view in it, and, with `choice`, the
-    graph the automatic k reads (`_choose_n_clusters`; None without).
+    graph the automatic k reads (`_cluster_count_gaps`; None without).
 
     fusion "graph" (default): the mean of the views' graphs. The other fusions fuse the views'
     features first and build one graph of the result, for comparison: "pslf" (paper 4.3, its
@@ -403,14 +405,14 @@ def _views(dicts, keeps, lines, n_dims):
     return views, names + ["line character"], np.asarray(kinds)
 
 
-def _choose_n_clusters(a, n: int) -> int:
-    """The number of clusters at the largest spectral gap (graph.choose_n_clusters) of `a`: the
+def _cluster_count_gaps(a, n: int) -> dict[int, float]:
+    """The spectral gap of each number of clusters allowed (graph.spectral_gaps) in `a`: the
     views' graphs at `graph.CHOICE_EDGES` nearest, fused (the default fusion; other fusions:
     their own graph). A sparser graph splits its spectrum into more near-equal gaps: on the
     generalisation benchmark (17 collections, 3 seeds) the gap of the 20-edge style graph was
     right on 17 of 51 runs, of a 40-edge one on 24, of the dense graph on 25. Since the style
     graph is the ladder of 5-40 nearest: 40 nearest 27 of 51, the ladder itself 15."""
-    return graph.choose_n_clusters(a, _max_clusters(n))
+    return graph.spectral_gaps(a, _max_clusters(n))
 
 
 def _max_clusters(n: int) -> int:
@@ -570,7 +572,7 @@ def analyse(drawings: list[ShapeDrawings], params: AnalysisParams,
         features = (features - features.mean(axis=0)) / (features.std(axis=0) + 1e-9)
 
     keeps = [np.ones(len(d.bank), bool) for d in dicts]
-    prev, reading = None, None
+    prev, reading, k_gaps = None, None, None
     rounds, seen = [], set()
     for r in range(max(1, params.max_rounds)):
         t = time.perf_counter()
@@ -589,7 +591,8 @@ def analyse(drawings: list[ShapeDrawings], params: AnalysisParams,
         t = time.perf_counter()
         prog.step("cluster", r, params.max_rounds)
         if pick_k:
-            n_clusters = _choose_n_clusters(a_choice, n)
+            k_gaps = _cluster_count_gaps(a_choice, n)
+            n_clusters = graph.choose_n_clusters(k_gaps)
         clusters, conf, n_c, fused, reading = _cluster(a, features, params, y, trip, n_clusters,
                                                        reading)     # chosen once, in round 0
         timings["cluster"] = timings.get("cluster", 0.0) + time.perf_counter() - t
@@ -643,7 +646,8 @@ def analyse(drawings: list[ShapeDrawings], params: AnalysisParams,
                           style_filters=style_filters,
                           view_weights=None if weights is None else np.asarray(weights),
                           view_names=view_names, rounds=rounds, timings=timings,
-                          words=bank.hog, word_cluster=word_cluster, word_score=word_score)
+                          words=bank.hog, word_cluster=word_cluster, word_score=word_score,
+                          k_gaps=k_gaps)
 
 
 def style_similarity(result: AnalysisResult) -> np.ndarray:

@@ -153,6 +153,23 @@ def confusion(clusters, reference) -> tuple[list, np.ndarray]:
     return classes, table
 
 
+def cluster_count_note(report: dict) -> str:
+    """How sure the automatic number of clusters is, in words ("" when the user gave it): the
+    runner-up and its spectral gap against the chosen one's, so a person who sees styles merged
+    or split knows which number to try (the automatic k is right on fewer than half of the
+    generalisation benchmark's runs)."""
+    auto = report.get("automatic_k")
+    if not auto or len(auto["gaps"]) < 2:
+        return ""
+    chosen = int(auto["chosen"])
+    gaps = {int(k): float(g) for k, g in auto["gaps"].items()}
+    runner = max((k for k in gaps if k != chosen), key=lambda k: (gaps[k], -k))
+    share = gaps[runner] / gaps[chosen] if gaps[chosen] > 0 else 1.0
+    return (f"The number of clusters was chosen from the data: {chosen}; the next likeliest is "
+            f"{runner} (spectral gap {share:.2f} of {chosen}'s): if styles look merged or split, "
+            f"give the number of clusters.")
+
+
 def summary_sentence(report: dict, n_skipped: int) -> str:
     """The run in words: what was analysed, what was found, how good it is against truth."""
     n, k = len(report["shapes"]), len(report["clusters"])
@@ -167,6 +184,9 @@ def summary_sentence(report: dict, n_skipped: int) -> str:
     text = ", ".join(words) + "."
     sizes = sorted((c["size"] for c in report["clusters"]), reverse=True)
     text += " Cluster sizes " + ", ".join(map(str, sizes)) + "."
+    note = cluster_count_note(report)
+    if note:
+        text += " " + note
     sc = report.get("scores", {})
     if "style" in sc:
         text += (f" Against the ground truth the clusters are {100 * sc['style']['purity']:.0f}% pure"

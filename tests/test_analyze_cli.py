@@ -86,6 +86,12 @@ def test_report_json_has_what_users_read(first_run, sample):
     assert html.count("<figure>") == len(rep["shapes"])
     assert all((out / "images" / f"{s['name']}_lines.png").is_file() for s in rep["shapes"])
     assert "render" in res.stderr and "/16" in res.stderr   # progress went to stderr
+    # no --clusters: the number was chosen from the data, and the user is told the runner-up
+    auto = rep["automatic_k"]
+    gaps = {int(k): g for k, g in auto["gaps"].items()}
+    assert set(gaps) == {2, 3, 4}                            # 2 .. N/4 for 16 shapes
+    assert auto["chosen"] == len(rep["clusters"]) == max(gaps, key=gaps.get)
+    assert "next likeliest is" in res.stderr and "next likeliest is" in html
 
 
 def test_result_blend_carries_results_on_every_mesh(first_run):
@@ -210,4 +216,5 @@ def test_the_numpy_renderer_runs_the_whole_analysis(sample, tmp_path):
     assert rep["parameters"]["drawing"]["renderer"] == "zbuffer"
     assert len(rep["shapes"]) == len(blend_state(sample / "sample.blend")["objects"])
     assert {s["cluster"] for s in rep["shapes"]} == {0, 1}
+    assert "automatic_k" not in rep and "next likeliest" not in res.stderr   # the user gave k
     assert any(f.name.endswith(".npz") for f in (tmp_path / "cache").rglob("*"))

@@ -26,7 +26,11 @@ def test_partition_recovers_separated_groups_whatever_their_order():
 def test_choose_n_clusters_finds_the_spectral_gap():
     for k in (2, 3, 5):
         x, _ = _blobs([12] * k, seed=k)
-        assert graph.choose_n_clusters(graph.affinity(x), 10) == k
+        gaps = graph.spectral_gaps(graph.affinity(x), 10)
+        assert set(gaps) == set(range(2, 11)) and graph.choose_n_clusters(gaps) == k
+        assert all(gaps[k] > 2 * g for j, g in gaps.items() if j != k)   # clearly ahead
+    assert graph.choose_n_clusters({2: 0.1, 3: 0.3, 4: 0.3}) == 3        # a tie: the fewer
+    assert graph.spectral_gaps(graph.affinity(_blobs([1, 1], seed=0)[0]), 10) == {2: 0.0}
 
 
 def test_fusion_keeps_what_the_views_agree_on():

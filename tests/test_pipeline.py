@@ -74,6 +74,17 @@ def labelled(collection):
     return analyse(collection[0], PARAMS, labels=_labels(collection))
 
 
+def test_the_automatic_k_is_the_largest_spectral_gap_and_reports_every_gap(collection,
+                                                                          unsupervised):
+    drawings, _, _ = collection
+    assert unsupervised[0].k_gaps is None                                 # k was given
+    result = analyse(drawings, AnalysisParams(n_representatives=20, n_clusters=None,
+                                              max_rounds=2, random_state=0))
+    gaps = result.k_gaps
+    assert set(gaps) == set(range(2, min(10, len(drawings) // 4) + 1))
+    assert result.n_clusters == max(gaps, key=gaps.get) == len(set(result.clusters))
+
+
 def test_labels_are_kept_and_map_to_classes(collection, labelled):
     drawings, styles, _ = collection
     labels, result = _labels(collection), labelled

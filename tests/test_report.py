@@ -1,8 +1,8 @@
 """The report's pieces (pure core): tables, typical shapes, patch crops, the style map, the summary."""
 import numpy as np
 
-from style_coanalysis.report import (colour, confusion, map_coordinates, patch_image, style_map,
-                                     summary_sentence, typical_order)
+from style_coanalysis.report import (cluster_count_note, colour, confusion, map_coordinates,
+                                     patch_image, style_map, summary_sentence, typical_order)
 
 
 def test_confusion_counts_only_shapes_with_a_reference():
@@ -39,6 +39,18 @@ def test_style_map_draws_each_cluster_and_rings_given_labels():
         assert (np.abs(img - colour(c)).sum(axis=2) == 0).sum() > 50
     assert (ringed.sum(axis=2) == 0).sum() > (img.sum(axis=2) == 0).sum()   # black ring pixels
     assert map_coordinates(coords[:4]).shape == (4, 2)                        # small: no t-SNE
+
+
+def test_the_automatic_number_of_clusters_names_its_runner_up():
+    report = {"automatic_k": {"chosen": 3, "gaps": {"2": 0.05, "3": 0.20, "4": 0.15, "5": 0.15}}}
+    note = cluster_count_note(report)
+    assert "chosen from the data: 3" in note and "next likeliest is 4" in note
+    assert "0.75 of 3's" in note
+    assert cluster_count_note({}) == ""                                    # k was given
+    assert cluster_count_note({"automatic_k": {"chosen": 2, "gaps": {"2": 0.0}}}) == ""
+    report |= {"shapes": [{}] * 9, "clusters": [{"size": 3}] * 3,
+               "parameters": {"labels": 0, "triplets": 0}}
+    assert note in summary_sentence(report, n_skipped=0)
 
 
 def test_summary_says_what_was_run_and_found():

@@ -234,7 +234,7 @@ def test_maps_and_regions_in_two_processes_are_those_of_one(tmp_path):
     assert len(list((tmp_path / "c2" / "regions").rglob("*.npz"))) == 5
 
 
-def analysed(labels=None):
+def analysed(labels=None, clusters=2):
     """A real analysis of four small synthetic shapes (no Blender)."""
     from style_coanalysis.drawings import ShapeDrawings
     from style_coanalysis.options import build_options
@@ -246,13 +246,15 @@ def analysed(labels=None):
         shapes.append(ShapeDrawings(f"s{i}", imgs, rng.random((2, 3, 4)),
                                     rng.random((6, 3)).astype(np.float32),
                                     np.arange(6, dtype=np.int32), np.ones((2, 6), bool), px))
-    params = build_options(clusters=2, rounds=2).params
+    params = build_options(clusters=clusters, rounds=2).params
     return shapes, params, pipeline.analyse(shapes, params, labels=labels)
 
 
-@pytest.mark.parametrize("labels", [None, {"s0": "x", "s3": "y"}])
-def test_analysis_result_round_trips_exactly(tmp_path, labels):
-    shapes, params, result = analysed(labels)
+@pytest.mark.parametrize("labels, clusters", [(None, 2), ({"s0": "x", "s3": "y"}, 2),
+                                              (None, "auto")])
+def test_analysis_result_round_trips_exactly(tmp_path, labels, clusters):
+    shapes, params, result = analysed(labels, clusters)
+    assert (result.k_gaps is None) == (clusters != "auto")
     same_result(result_from_arrays(result_to_arrays(result)), result)
     cache = AnalysisCache(tmp_path)
     key = analysis_key(["d0", "d1", "d2", "d3"], params.as_dict(), labels, None)

@@ -308,6 +308,9 @@ def build_report(meshes, shapes, clusters, skipped, options, timings, result, lo
         "rounds": list(result.rounds or []),
         "n_style_filters": len(result.style_filters),
     }
+    if result.k_gaps:                     # the number of clusters was chosen from the data
+        report["automatic_k"] = {"chosen": int(result.n_clusters),
+                                 "gaps": {str(k): round(g, 4) for k, g in result.k_gaps.items()}}
     styles = [m.truth.get("style") for m in meshes]
     if all(s is not None for s in styles):
         pred = np.array([s.cluster for s in shapes])
