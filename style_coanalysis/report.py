@@ -21,6 +21,7 @@ import numpy as np
 from PIL import Image, ImageDraw
 
 from . import atomic
+from .graph import choose_n_clusters
 from .rig import project
 
 ORANGE = np.array([255, 140, 0], np.float64)
@@ -163,7 +164,7 @@ def cluster_count_note(report: dict) -> str:
         return ""
     chosen = int(auto["chosen"])
     gaps = {int(k): float(g) for k, g in auto["gaps"].items()}
-    runner = max((k for k in gaps if k != chosen), key=lambda k: (gaps[k], -k))
+    runner = choose_n_clusters({k: g for k, g in gaps.items() if k != chosen})
     share = gaps[runner] / gaps[chosen] if gaps[chosen] > 0 else 1.0
     return (f"The number of clusters was chosen from the data: {chosen}; the next likeliest is "
             f"{runner} (spectral gap {share:.2f} of {chosen}'s): if styles look merged or split, "
