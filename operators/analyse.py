@@ -214,10 +214,9 @@ class STYLE_OT_analyse(bpy.types.Operator):
                         + ", ".join(summary["shared_meshes"]))
         self.report({"INFO"}, f"{summary['objects']} shapes in {summary['clusters']} style "
                               "clusters")
-        from ..style_coanalysis.report import cluster_count_note   # PIL: only once a run ends
-        note = cluster_count_note(result.report)
-        if note:
-            self.report({"INFO"}, note)
+        from ..style_coanalysis.report import run_notes   # PIL: only once a run ends
+        for level, note in run_notes(result.report):
+            self.report({level}, note)
         return {"FINISHED"}
 
     # -- background / redo: synchronous

@@ -242,7 +242,7 @@ def analysis_key(shape_digests: list[str], params: dict, labels: dict | None,
 _RESULT_ARRAYS = ("clusters", "fused", "confidence", "label_given", "view_weights", "words",
                   "word_cluster", "word_score")
 _RESULT_JSON = ("names", "n_clusters", "classes", "predicted", "view_names", "rounds", "timings",
-                "k_gaps")
+                "k_gaps", "dictionary_agreement")
 _FILTER_JSON = ("cluster", "view", "source_shape", "source_seed", "source_pixel", "score")
 
 

@@ -92,6 +92,9 @@ def test_report_json_has_what_users_read(first_run, sample):
     assert set(gaps) == {2, 3, 4}                            # 2 .. N/4 for 16 shapes
     assert auto["chosen"] == len(rep["clusters"]) == max(gaps, key=gaps.get)
     assert "next likeliest is" in res.stderr and "next likeliest is" in html
+    # unsupervised: how firmly the drawings hold the clusters, in the report and on stderr
+    assert -1 <= rep["dictionary_agreement"] <= 1
+    assert "The clusters are" in res.stderr and "The clusters are" in html
 
 
 def test_result_blend_carries_results_on_every_mesh(first_run):
@@ -217,4 +220,5 @@ def test_the_numpy_renderer_runs_the_whole_analysis(sample, tmp_path):
     assert len(rep["shapes"]) == len(blend_state(sample / "sample.blend")["objects"])
     assert {s["cluster"] for s in rep["shapes"]} == {0, 1}
     assert "automatic_k" not in rep and "next likeliest" not in res.stderr   # the user gave k
+    assert "dictionary_agreement" in rep and "The clusters are" in res.stderr
     assert any(f.name.endswith(".npz") for f in (tmp_path / "cache").rglob("*"))

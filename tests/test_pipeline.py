@@ -85,6 +85,25 @@ def test_the_automatic_k_is_the_largest_spectral_gap_and_reports_every_gap(colle
     assert result.n_clusters == max(gaps, key=gaps.get) == len(set(result.clusters))
 
 
+def test_the_dictionaries_agreement_says_how_firmly_the_drawings_hold_the_clusters(
+        collection, unsupervised, labelled):
+    from style_coanalysis import pipeline
+    drawings, styles, _ = collection
+    result = unsupervised[0]
+    assert -1.0 <= result.dictionary_agreement <= 1.0
+    assert labelled.dictionary_agreement is None                 # labels decided the clusters
+    # it reads the clusters: the same clusters shuffled agree less with the dictionaries' cuts
+    encoded = pipeline.encode(drawings, PARAMS)
+    agree = pipeline._dictionary_agreement(encoded.dictionaries, encoded.lines, PARAMS,
+                                           result.clusters, 3)
+    assert agree == pytest.approx(result.dictionary_agreement)
+    shuffled = np.random.default_rng(0).permutation(result.clusters)
+    assert pipeline._dictionary_agreement(encoded.dictionaries, encoded.lines, PARAMS,
+                                          shuffled, 3) < agree - 0.2
+    one = AnalysisParams(n_representatives=20, n_clusters=3, max_rounds=1, n_dictionaries=1)
+    assert analyse(drawings, one).dictionary_agreement is None      # nothing to compare with
+
+
 def test_labels_are_kept_and_map_to_classes(collection, labelled):
     drawings, styles, _ = collection
     labels, result = _labels(collection), labelled

@@ -1,8 +1,9 @@
 """The report's pieces (pure core): tables, typical shapes, patch crops, the style map, the summary."""
 import numpy as np
 
-from style_coanalysis.report import (cluster_count_note, colour, confusion, map_coordinates,
-                                     patch_image, style_map, summary_sentence, typical_order)
+from style_coanalysis.report import (FIRM, cluster_count_note, colour, confusion,
+                                     firmness_note, map_coordinates, patch_image, run_notes,
+                                     style_map, summary_sentence, typical_order)
 
 
 def test_confusion_counts_only_shapes_with_a_reference():
@@ -51,6 +52,22 @@ def test_the_automatic_number_of_clusters_names_its_runner_up():
     report |= {"shapes": [{}] * 9, "clusters": [{"size": 3}] * 3,
                "parameters": {"labels": 0, "triplets": 0}}
     assert note in summary_sentence(report, n_skipped=0)
+
+
+def test_how_firm_the_clusters_are_is_said_and_weak_ones_warn():
+    assert firmness_note({}) == "" and run_notes({}) == []              # labels or triplets
+    firm, weak = {"dictionary_agreement": FIRM}, {"dictionary_agreement": FIRM - 0.01}
+    assert firmness_note(firm).startswith("The clusters are firm") and f"{FIRM:.2f}" in \
+        firmness_note(firm)
+    assert "not firmly held" in firmness_note(weak) and "labels" in firmness_note(weak)
+    assert [lv for lv, _ in run_notes(firm)] == ["INFO"]
+    assert [lv for lv, _ in run_notes(weak)] == ["WARNING"]
+    both = weak | {"automatic_k": {"chosen": 3, "gaps": {"2": 0.1, "3": 0.2}}}
+    assert [lv for lv, _ in run_notes(both)] == ["INFO", "WARNING"]
+    both |= {"shapes": [{}] * 9, "clusters": [{"size": 3}] * 3,
+             "parameters": {"labels": 0, "triplets": 0}}
+    text = summary_sentence(both, n_skipped=0)
+    assert all(note in text for _, note in run_notes(both))
 
 
 def test_summary_says_what_was_run_and_found():

@@ -255,6 +255,7 @@ def analysed(labels=None, clusters=2):
 def test_analysis_result_round_trips_exactly(tmp_path, labels, clusters):
     shapes, params, result = analysed(labels, clusters)
     assert (result.k_gaps is None) == (clusters != "auto")
+    assert (result.dictionary_agreement is None) == (labels is not None)
     same_result(result_from_arrays(result_to_arrays(result)), result)
     cache = AnalysisCache(tmp_path)
     key = analysis_key(["d0", "d1", "d2", "d3"], params.as_dict(), labels, None)

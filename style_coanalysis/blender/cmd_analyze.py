@@ -127,7 +127,6 @@ def run(args) -> int:
         s = job.report["scores"]["style"]
         summary += f"; style purity {s['purity']:.3f}, NMI {s['nmi']:.3f}"
     print(f"{summary}; wrote {out}/result.blend, report.json, report.html", file=sys.stderr)
-    note = report.cluster_count_note(job.report)
-    if note:
-        print(note, file=sys.stderr)
+    for level, note in report.run_notes(job.report):
+        print(f"{'warning: ' if level == 'WARNING' else ''}{note}", file=sys.stderr)
     return 0

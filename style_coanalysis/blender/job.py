@@ -311,6 +311,8 @@ def build_report(meshes, shapes, clusters, skipped, options, timings, result, lo
     if result.k_gaps:                     # the number of clusters was chosen from the data
         report["automatic_k"] = {"chosen": int(result.n_clusters),
                                  "gaps": {str(k): round(g, 4) for k, g in result.k_gaps.items()}}
+    if result.dictionary_agreement is not None:     # unsupervised: how firm the clusters are
+        report["dictionary_agreement"] = round(result.dictionary_agreement, 4)
     styles = [m.truth.get("style") for m in meshes]
     if all(s is not None for s in styles):
         pred = np.array([s.cluster for s in shapes])

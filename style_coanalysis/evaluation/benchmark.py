@@ -534,8 +534,9 @@ def evaluate(collections, modes: Sequence[str] = MODES, methods: Sequence[str] =
                             break
                     partitions[(method, mode, seed)] = (pred, res)
                     _, _, _, idx = constraints_for(mode, coll.truth["style"], coll.names, seed)
-                    runs.append(score_run(pred, coll.truth, idx) | {"seconds": sec, "seed": seed,
-                                                                     "rounds": _rounds(res, coll)})
+                    runs.append(score_run(pred, coll.truth, idx) | {
+                        "seconds": sec, "seed": seed, "rounds": _rounds(res, coll),
+                        "agreement": getattr(res, "dictionary_agreement", None)})
                 if err:
                     entry["modes"][mode][method] = {"n/a": err}
                     log(f"  {mode:13s} {method:8s} n/a: {err}")
@@ -893,7 +894,31 @@ def goal_report(results: dict) -> str:
                         f"at or above {GOAL_STABILITY} in every mode measured"))
     lines.append(f"The held-out collections' goal (k given >= {GOAL_HELD_OUT['k']}, 2 labels "
                  f">= {GOAL_HELD_OUT['labels-2']}) met here on: {', '.join(held) or 'none'}")
+    lines += firmness_lines(results)
     return "\n".join(lines)
+
+
+def firmness_lines(results: dict) -> list[str]:
+    """Whether the firmness a run reports (report.firmness_note: the dictionaries' agreement at
+    or above report.FIRM) tells good clusters from poor ones: per unsupervised mode, the
+    default's runs at or above and below it, their mean style purity and how many reach 0.9."""
+    from ..report import FIRM
+    lines = []
+    for mode, title in (("k", "k given"), ("auto", "automatic k")):
+        runs = [r for e in results["collections"].values()
+                for r in e["modes"].get(mode, {}).get("default", {}).get("runs", [])
+                if r.get("agreement") is not None]
+        if not runs:
+            continue
+        parts = []
+        for side, keep in ((f">= {FIRM}", lambda a: a >= FIRM), (f"< {FIRM}", lambda a: a < FIRM)):
+            pur = [r["purity"] for r in runs if keep(r["agreement"])]
+            parts.append(f"{side}: {len(pur)} runs" + (
+                f", mean purity {np.mean(pur):.3f}, at least 0.9 on {sum(p >= 0.9 for p in pur)}"
+                if pur else ""))
+        lines.append(f"Firmness reported ({title}; the dictionaries' agreement) "
+                     + "; ".join(parts))
+    return lines
 
 
 def plot(results: dict, path) -> None:
