@@ -194,6 +194,14 @@ def firmness_note(report: dict) -> str:
             f"file may regroup shapes; style labels on a few shapes per style steer it.")
 
 
+def firmness_label(report: dict) -> str:
+    """The firmness in a few words for the panel's sidebar ("" where no firmness is reported)."""
+    agree = report.get("dictionary_agreement")
+    if agree is None:
+        return ""
+    return f"{'firm' if agree >= FIRM else 'not firm'} ({agree:.2f})"
+
+
 def run_notes(report: dict) -> list[tuple[str, str]]:
     """What a finished run tells its user besides the counts, as (level, text): the automatic
     number of clusters' runner-up, and how firm the clusters are ("WARNING" when not

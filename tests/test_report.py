@@ -2,8 +2,9 @@
 import numpy as np
 
 from style_coanalysis.report import (FIRM, cluster_count_note, colour, confusion,
-                                     firmness_note, map_coordinates, patch_image, run_notes,
-                                     style_map, summary_sentence, typical_order)
+                                     firmness_label, firmness_note, map_coordinates,
+                                     patch_image, run_notes, style_map, summary_sentence,
+                                     typical_order)
 
 
 def test_confusion_counts_only_shapes_with_a_reference():
@@ -60,6 +61,8 @@ def test_how_firm_the_clusters_are_is_said_and_weak_ones_warn():
     assert firmness_note(firm).startswith("The clusters are firm") and f"{FIRM:.2f}" in \
         firmness_note(firm)
     assert "not firmly held" in firmness_note(weak) and "labels" in firmness_note(weak)
+    assert firmness_label(firm) == f"firm ({FIRM:.2f})" and firmness_label({}) == ""
+    assert firmness_label(weak).startswith("not firm")
     assert [lv for lv, _ in run_notes(firm)] == ["INFO"]
     assert [lv for lv, _ in run_notes(weak)] == ["WARNING"]
     both = weak | {"automatic_k": {"chosen": 3, "gaps": {"2": 0.1, "3": 0.2}}}

@@ -28,7 +28,8 @@ def collection(ext, tmp_path_factory):
                          text=True, timeout=900)
     assert res.returncode == 0, res.stderr[-3000:]
     report = json.loads((tmp / "out" / "report.json").read_text())
-    return blend, {s["name"]: s["cluster"] for s in report["shapes"]}, tmp / "cache"
+    return blend, {s["name"]: s["cluster"] for s in report["shapes"]}, tmp / "cache", \
+        report["dictionary_agreement"]
 
 
 def prepare(blend, cache):
@@ -50,16 +51,19 @@ def partition(assign: dict) -> set:
 
 
 def test_operator_gives_the_same_clusters_as_the_command(collection):
-    blend, headless, cache = collection
+    blend, headless, cache, agreement = collection
     prepare(blend, cache)
     assert bpy.ops.style.analyse() == {"FINISHED"}
     ui = {o.name: o["style_cluster"] for o in bpy.context.scene.objects if "style_cluster" in o}
     assert set(ui) == set(headless)
     assert partition(ui) == partition(headless)
+    # the sidebar keeps how firm the clusters are, as the command's report.json has it
+    assert "firm" in bpy.context.scene.style_coanalysis.last_report
+    assert f"({agreement:.2f})" in bpy.context.scene.style_coanalysis.last_report
 
 
 def test_cancel_from_the_progress_callback_leaves_nothing_behind(collection, monkeypatch):
-    blend, _, cache = collection
+    blend, _, cache, _ = collection
     prepare(blend, cache)
     from style_coanalysis_ext.style_coanalysis.blender import job
     real = job.run_steps

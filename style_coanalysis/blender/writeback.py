@@ -252,8 +252,10 @@ def write_results(scene, result, collection_prefix: str = "Style", progress=None
             item.size = len(members.get(cid, ()))
             item.label = (info.get(cid, {}).get("label") or "")
         skipped = f", {len(result.skipped)} skipped" if result.skipped else ""
+        from ..report import firmness_label            # PIL: only once a run ends
+        firm = firmness_label(getattr(result, "report", None) or {})
         settings.last_report = (f"{len(result.shapes)} shapes in {len(cluster_ids)} clusters"
-                                f"{skipped}")
+                                f"{skipped}{', ' + firm if firm else ''}")
     if progress is not None:
         progress("write", len(by_mesh), len(by_mesh))
     return {"objects": len(result.shapes), "meshes": len(by_mesh), "shared_meshes": shared,
