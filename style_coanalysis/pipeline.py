@@ -423,9 +423,9 @@ def _dictionary_agreement(dicts, lines, params, clusters, n_clusters: int) -> fl
     each dictionary's own cut into as many clusters (its every word's views and the line
     character, fused as the style graph is). Where the cut is one of several the data support
     about equally, independent draws of the words cut differently; that is also where another
-    analysis seed or a re-exported file regroups shapes. On the generalisation benchmark (25
-    collections, 3 seeds, k given) 12 of the 13 runs at 0.8 or more were at least 0.9 pure in
-    style, 5 of the 62 below (docs/generalisation.md; report.FIRM). None with one dictionary or
+    analysis seed or a re-exported file regroups shapes. On the generalisation benchmark (27
+    collections, 3 seeds, k given) 15 of the 16 runs at 0.8 or more were at least 0.9 pure in
+    style, 5 of the 65 below (README, "The report"; report.FIRM). None with one dictionary or
     one cluster."""
     if len(dicts) < 2 or n_clusters < 2:
         return None

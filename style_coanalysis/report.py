@@ -172,8 +172,8 @@ def cluster_count_note(report: dict) -> str:
 
 
 # the dictionaries' agreement (pipeline._dictionary_agreement) at or above which clusters are
-# called firm: on the generalisation benchmark (25 collections, 3 seeds, k given) 12 of the 13
-# runs at or above it were at least 0.9 pure in style, 5 of the 62 below (docs/generalisation.md)
+# called firm: on the generalisation benchmark (27 collections, 3 seeds, k given) 15 of the 16
+# runs at or above it were at least 0.9 pure in style, 5 of the 65 below (README, "The report")
 FIRM = 0.8
 
 
