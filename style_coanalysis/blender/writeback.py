@@ -253,7 +253,7 @@ def write_results(scene, result, collection_prefix: str = "Style", progress=None
             item.label = (info.get(cid, {}).get("label") or "")
         skipped = f", {len(result.skipped)} skipped" if result.skipped else ""
         from ..report import firmness_label            # PIL: only once a run ends
-        firm = firmness_label(getattr(result, "report", None) or {})
+        firm = firmness_label(result.report)
         settings.last_report = (f"{len(result.shapes)} shapes in {len(cluster_ids)} clusters"
                                 f"{skipped}{', ' + firm if firm else ''}")
     if progress is not None:
