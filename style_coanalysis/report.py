@@ -177,17 +177,24 @@ def cluster_count_note(report: dict) -> str:
 FIRM = 0.8
 
 
+def _firm(report: dict) -> bool | None:
+    """Whether the report's clusters are firm (None where no firmness is reported)."""
+    agree = report.get("dictionary_agreement")
+    return None if agree is None else agree >= FIRM
+
+
 def firmness_note(report: dict) -> str:
     """How firmly the drawings hold unsupervised clusters, in words ("" with labels or
     triplets, or one dictionary): where independent draws of the style words cut otherwise,
     another seed or a re-exported file can regroup shapes, and the user should know before
     marking regions or decimating by them."""
-    agree = report.get("dictionary_agreement")
-    if agree is None:
+    firm = _firm(report)
+    if firm is None:
         return ""
+    agree = report["dictionary_agreement"]
     head = f"the analysis's dictionaries of style words, each cut alone, agree with them at ARI " \
            f"{agree:.2f}"
-    if agree >= FIRM:
+    if firm:
         return f"The clusters are firm: {head}."
     return (f"The clusters are not firmly held: {head} (firm: {FIRM:.1f} or more), so the "
             f"drawings support other groupings nearly as well and another seed or a re-exported "
@@ -196,10 +203,10 @@ def firmness_note(report: dict) -> str:
 
 def firmness_label(report: dict) -> str:
     """The firmness in a few words for the panel's sidebar ("" where no firmness is reported)."""
-    agree = report.get("dictionary_agreement")
-    if agree is None:
+    firm = _firm(report)
+    if firm is None:
         return ""
-    return f"{'firm' if agree >= FIRM else 'not firm'} ({agree:.2f})"
+    return f"{'firm' if firm else 'not firm'} ({report['dictionary_agreement']:.2f})"
 
 
 def run_notes(report: dict) -> list[tuple[str, str]]:
@@ -207,9 +214,7 @@ def run_notes(report: dict) -> list[tuple[str, str]]:
     number of clusters' runner-up, and how firm the clusters are ("WARNING" when not
     firm). The panel's Analyse operator reports them, the command prints them."""
     notes = [("INFO", cluster_count_note(report))]
-    agree = report.get("dictionary_agreement")
-    notes.append(("WARNING" if agree is not None and agree < FIRM else "INFO",
-                  firmness_note(report)))
+    notes.append(("WARNING" if _firm(report) is False else "INFO", firmness_note(report)))
     return [(level, text) for level, text in notes if text]
 
 
