@@ -39,8 +39,9 @@ class AnalysisParams:
     n_dictionaries: int = 5              # dictionaries drawn independently; their graphs averaged
     structure_patch_size: int = 48       # pixels, layout patches used to find structural look-alikes
     n_style_dims: int = 10               # principal directions kept per view; spectral coordinates
-    min_filters: int = 5                 # reselection keeps at least this many filters
-    n_clusters: int | None = None        # None: chosen automatically (self-tuning spectral)
+    min_filters: int = 5                 # reselection keeps at least this many words per dictionary
+    n_clusters: int | None = None        # None: chosen from the data (default: the largest
+                                         # spectral gap; paper: self-tuning spectral clustering)
     n_components: int = 20               # K latent factors per view in PSLF
     eta: float = 0.2                     # Kc / K, the shared proportion of factors
     lam: float = 20.0                    # lambda, smoothness of the view weights

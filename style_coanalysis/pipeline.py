@@ -621,8 +621,8 @@ def analyse(drawings: list[ShapeDrawings], params: AnalysisParams,
 
         t = time.perf_counter()
         prog.step("reselect", r, params.max_rounds)
-        sels = [reselect(d.relative, clusters, np.zeros(len(d.bank), np.int64), mu=params.mu,
-                         min_per_view=params.min_filters) for d in dicts]
+        sels = [reselect(d.relative, clusters, mu=params.mu, min_kept=params.min_filters)
+                for d in dicts]
         timings["reselect"] = timings.get("reselect", 0.0) + time.perf_counter() - t
         changed = n_changed(prev, clusters)
         same_words = all(np.array_equal(s.keep, k) for s, k in zip(sels, keeps))
