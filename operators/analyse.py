@@ -13,7 +13,8 @@ import bpy
 
 from ..style_coanalysis.blender import properties, space_store, writeback
 from ..style_coanalysis.meshes import InputError
-from ..style_coanalysis.options import PARAMETERS, build_options, check_coordinates, check_shapes
+from ..style_coanalysis.options import (PAPER_ONLY, PARAMETERS, build_options, check_coordinates,
+                                        check_shapes)
 from ..style_coanalysis.progress import Cancelled
 
 STEP_BUDGET_S = 0.1     # time spent in the generator per TIMER event before yielding to the UI
@@ -144,7 +145,7 @@ def build_job(context):
         clusters="auto" if settings.auto_clusters else settings.n_clusters,
         method=settings.method, labels=labels or None, triplets=triplets or None,
         **{option: getattr(settings, properties.PARAMETER_PROPS[option])
-           for option in PARAMETERS})
+           for option in PARAMETERS if settings.method == "paper" or option not in PAPER_ONLY})
     for m in meshes:
         check_coordinates(m)
     check_shapes(options, [m.name for m in meshes])

@@ -78,9 +78,12 @@ class VIEW3D_PT_style_advanced(_StylePanel, bpy.types.Panel):
         s = context.scene.style_coanalysis
         col = self.layout.column()
         col.use_property_split = True
-        for name in ("method", "n_representatives", "eta", "lam", "beta", "gamma", "mu",
-                     "max_rounds"):
+        for name in ("method", "n_representatives", "mu", "max_rounds"):
             col.prop(s, name)
+        sub = col.column()
+        sub.enabled = s.method == "paper"      # PSLF's: the default method does not read them
+        for name in ("eta", "lam", "beta", "gamma"):
+            sub.prop(s, name)
 
 
 class VIEW3D_PT_style_labels(_StylePanel, bpy.types.Panel):

@@ -28,13 +28,16 @@ DEFAULTS = AnalysisParams()              # the paper's values, read from params.
 # The command's flags (--representatives, ...) and the panel's Advanced properties use these.
 PARAMETERS = {
     "representatives": ("n_representatives", "k-means centres of the layout dictionary"),
-    "eta": ("eta", "PSLF shared proportion of latent factors Kc/K, in (0, 1]"),
-    "lam": ("lam", "PSLF smoothness of the view weights (lambda)"),
-    "beta": ("beta", "weight of the label term (eq. 2)"),
-    "gamma": ("gamma", "l2,1 penalty on W (eq. 2)"),
+    "eta": ("eta", "PSLF shared proportion of latent factors Kc/K, in (0, 1]; --method paper only"),
+    "lam": ("lam", "PSLF smoothness of the view weights (lambda); --method paper only"),
+    "beta": ("beta", "PSLF weight of the label term (eq. 2); --method paper only"),
+    "gamma": ("gamma", "PSLF l2,1 penalty on W (eq. 2); --method paper only"),
     "mu": ("mu", "patch reselection threshold (eq. 4), in [0, 1]"),
     "rounds": ("max_rounds", "cluster-and-reselect rounds at most"),
 }
+# PSLF's parameters: only the paper's method runs PSLF (the default fuses its views' graphs), so
+# with the default method a value given for one of these would change nothing, and is refused
+PAPER_ONLY = ("eta", "lam", "beta", "gamma")
 METHOD_HELP = ("'default' (this extension's method, see README) or 'paper' (sections 3-4.5 "
                "as written)")
 
@@ -130,6 +133,12 @@ def build_options(*, renderer: str = "freestyle", up: str = "z", suggestive_cont
         problems.append(f"--up must be one of {', '.join(UP_AXES)}, not {up!r}")
     if method not in METHODS:
         problems.append(f"--method must be one of {', '.join(METHODS)}, not {method!r}")
+    unread = [f"--{o} {params[o]!r}" for o in PAPER_ONLY if params.get(o) is not None]
+    if method == "default" and unread:
+        problems.append(f"{', '.join(unread)}: only the paper's method reads "
+                        f"{'this PSLF parameter' if len(unread) == 1 else 'these PSLF parameters'}"
+                        " (the default method fuses its views without PSLF); add --method paper, "
+                        f"or leave {'it' if len(unread) == 1 else 'them'} out")
     _number(problems, "jobs", jobs, low=0, whole=True)
     _number(problems, "seed", seed, low=0, high=2 ** 32 - 1, whole=True)
     _number(problems, "representatives", values["representatives"], low=2, whole=True)

@@ -189,6 +189,20 @@ def test_bad_arguments_are_refused_before_any_work(shapes, tmp_path):
     assert not (tmp_path / "o").exists()
 
 
+def test_pslf_parameters_need_the_paper_method():
+    """PSLF runs only in the paper's method: giving one of its parameters with the default
+    method would change nothing, so it is refused by name rather than ignored."""
+    from style_coanalysis.meshes import InputError
+    from style_coanalysis.options import build_options
+    with pytest.raises(InputError, match=r"--eta 0\.5, --gamma 3: only the paper's method"):
+        build_options(eta=0.5, gamma=3, mu=0.1)
+    with pytest.raises(InputError, match="--lam 5: .*add --method paper"):
+        build_options(method="default", lam=5)
+    opts = build_options(method="paper", eta=0.5, gamma=3)
+    assert opts.params.eta == 0.5 and opts.params.gamma == 3
+    assert build_options(mu=0.1, representatives=30, rounds=2).params.mu == 0.1
+
+
 def test_help_defaults_come_from_params():
     from style_coanalysis.cli import build_parser
     from style_coanalysis.options import PARAMETERS, build_options

@@ -96,6 +96,13 @@ def test_analyse_hands_constraints_and_settings_to_the_job(scene, fake):
     assert bpy.ops.style.analyse() == {"FINISHED"}
     options = fake.calls[-1][1]
     assert options.triplets == [("Chair_a", "Chair_b", "Table_a")] and options.labels is None
+    # back to the default method: PSLF's parameters (greyed out) are not handed over, so the
+    # value left from the paper's run neither stops the run nor reaches the analysis
+    s.method = "default"
+    assert bpy.ops.style.analyse() == {"FINISHED"}
+    options = fake.calls[-1][1]
+    assert options.params.method == "default" and options.params.eta == pytest.approx(0.2)
+    assert options.params.max_rounds == 2
 
 
 def test_operator_defaults_come_from_params(ext, scene):

@@ -40,7 +40,8 @@ METHODS = (("default", "Default", "This extension's method (see the README)"),
 
 
 def _param(option: str) -> dict:
-    return dict(default=default(option), description=help_text(option)[:1].upper() + help_text(option)[1:])
+    text = help_text(option).replace("--method paper", "the Paper method")
+    return dict(default=default(option), description=text[:1].upper() + text[1:])
 
 
 def default_cache_dir() -> str:
