@@ -28,7 +28,8 @@ def _add_drawing_options(p: argparse.ArgumentParser) -> None:
                    help="draw the shapes on the Dask cluster of this scheduler (tcp://host:8786; "
                         "needs dask[distributed], see README) instead of --jobs local processes")
     p.add_argument("--suggestive-contours", action="store_true",
-                   help="also draw suggestive contours (paper's choice; slower, see README)")
+                   help="also draw suggestive contours (paper's choice; freestyle only; slower, "
+                        "see README)")
 
 
 def build_parser() -> argparse.ArgumentParser:

@@ -108,6 +108,13 @@ def _number(problems, name, value, *, low=None, high=None, low_open=False, whole
         problems.append(f"--{name} must be {kind} in {rng}, not {value!r}")
 
 
+def suggestive_problem(renderer: str) -> str:
+    """Why --suggestive-contours cannot go with `renderer` (any but freestyle): said before any
+    work, not found out shape by shape (zbuffer) or silently not drawn (lineart)."""
+    return (f"--suggestive-contours: only the freestyle renderer draws them (--renderer {renderer} "
+            "draws silhouettes, borders and creases); use --renderer freestyle or leave it out")
+
+
 def build_options(*, renderer: str = "freestyle", up: str = "z", suggestive_contours=False,
                   jobs: int = 0, cache_dir=None, seed: int = 0, clusters="auto",
                   method: str | None = None, labels=None, triplets=None, **params) -> JobOptions:
@@ -129,6 +136,8 @@ def build_options(*, renderer: str = "freestyle", up: str = "z", suggestive_cont
     method = DEFAULTS.method if method is None else str(method).lower()
     if renderer not in RENDERERS:
         problems.append(f"--renderer must be one of {', '.join(RENDERERS)}, not {renderer!r}")
+    elif suggestive_contours and renderer != "freestyle":
+        problems.append(suggestive_problem(renderer))
     if up not in UP_AXES:
         problems.append(f"--up must be one of {', '.join(UP_AXES)}, not {up!r}")
     if method not in METHODS:

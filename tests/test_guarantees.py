@@ -178,6 +178,12 @@ def test_bad_arguments_are_refused_before_any_work(shapes, tmp_path):
     refused(run_cmd("analyze", blend, "--out", tmp_path / "o", "--clusters", 20, "--renderer",
                     "lineart"), "--clusters 20", "6 analysable shapes")
     refused(run_cmd("analyze", blend, "--out", tmp_path / "o", "--eta", 5), "--eta")
+    refused(run_cmd("analyze", blend, "--out", tmp_path / "o", "--eta", 0.5), "--eta 0.5",
+            "add --method paper")
+    refused(run_cmd("analyze", blend, "--out", tmp_path / "o", "--renderer", "lineart",
+                    "--suggestive-contours"), "--suggestive-contours", "--renderer lineart")
+    refused(run_cmd("render", blend, "--out", tmp_path / "o", "--renderer", "zbuffer",
+                    "--suggestive-contours"), "--suggestive-contours", "--renderer zbuffer")
     refused(run_cmd("analyze", blend, "--out", tmp_path / "o", "--labels", shapes / "labels.csv",
                     "--triplets", shapes / "labels.csv"), "labels or triplets, not both")
     refused(run_cmd("analyze", blend, "--out", tmp_path / "o", "--cache", tmp_path / "o" / "c"),
@@ -201,6 +207,15 @@ def test_pslf_parameters_need_the_paper_method():
     opts = build_options(method="paper", eta=0.5, gamma=3)
     assert opts.params.eta == 0.5 and opts.params.gamma == 3
     assert build_options(mu=0.1, representatives=30, rounds=2).params.mu == 0.1
+
+
+def test_suggestive_contours_need_freestyle():
+    from style_coanalysis.meshes import InputError
+    from style_coanalysis.options import build_options
+    for renderer in ("lineart", "zbuffer"):
+        with pytest.raises(InputError, match=f"--suggestive-contours: .*--renderer {renderer}"):
+            build_options(renderer=renderer, suggestive_contours=True)
+    assert build_options(renderer="freestyle", suggestive_contours=True).suggestive_contours
 
 
 def test_help_defaults_come_from_params():

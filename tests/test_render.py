@@ -236,11 +236,16 @@ def test_zbuffer_open_surface_seen_from_behind():
     assert a.seed_visible.all() and np.array_equal(a.seed_visible, b.seed_visible)
 
 
-def test_zbuffer_refuses_suggestive_contours():
+@pytest.mark.parametrize("renderer", ["zbuffer", "lineart"])
+def test_only_freestyle_draws_suggestive_contours(renderer):
+    """Line Art and the depth buffers have no suggestive contours: asked for, they refuse
+    rather than draw without them."""
     from style_coanalysis.blender.render import draw_shape
     from style_coanalysis.meshes import InputError
-    with pytest.raises(InputError, match="no suggestive contours"):
-        draw_shape(normalise(cube()), DrawingSettings(renderer="zbuffer", suggestive_contours=True))
+    n_scenes = len(bpy.data.scenes)
+    with pytest.raises(InputError, match=f"the {renderer} renderer draws no suggestive contours"):
+        draw_shape(normalise(cube()), DrawingSettings(renderer=renderer, suggestive_contours=True))
+    assert len(bpy.data.scenes) == n_scenes              # refused before making a scene
 
 
 def test_no_leaks_and_user_scene_untouched():

@@ -16,6 +16,7 @@ from skimage import draw, io
 
 from ..drawings import ShapeDrawings
 from ..meshes import InputError
+from ..options import suggestive_problem
 from ..params import DrawingSettings
 from . import batch, scene
 
@@ -73,9 +74,11 @@ def run(args) -> int:
     out = os.path.abspath(args.out)
     if os.path.exists(out) and not os.path.isdir(out):
         raise InputError(f"{out}: exists and is not a folder")
+    suggestive = bool(getattr(args, "suggestive_contours", False))
+    if suggestive and args.renderer != "freestyle":
+        raise InputError(suggestive_problem(args.renderer))
     meshes = load_meshes(os.path.abspath(args.input), getattr(args, "collection", None))
-    settings = DrawingSettings(renderer=args.renderer, up=args.up,
-                               suggestive_contours=bool(getattr(args, "suggestive_contours", False)))
+    settings = DrawingSettings(renderer=args.renderer, up=args.up, suggestive_contours=suggestive)
     cache_dir = getattr(args, "cache", None)
 
     def progress(stage, done, total):

@@ -459,8 +459,6 @@ RENDERERS = ("freestyle", "lineart", "zbuffer")
 
 def _zbuffer_steps(mesh: Mesh, settings: DrawingSettings, rig: Rig):
     """`draw_shape_steps` for the "zbuffer" renderer: every answer from one set of depth buffers."""
-    if settings.suggestive_contours:
-        raise InputError("the zbuffer renderer draws no suggestive contours: use freestyle")
     buffers = ShapeBuffers(mesh.vertices, mesh.faces, rig.matrices(), rig.locations(),
                            settings.image_size, rig.focal_px)
     yield "depth buffers"
@@ -499,6 +497,9 @@ def draw_shape_steps(mesh: Mesh, settings: DrawingSettings, threads: int = 0):
     """
     if settings.renderer not in RENDERERS:
         raise InputError(f"unknown renderer '{settings.renderer}' (use {', '.join(RENDERERS)})")
+    if settings.suggestive_contours and settings.renderer != "freestyle":
+        raise InputError(f"the {settings.renderer} renderer draws no suggestive contours: "
+                         "use freestyle")
     if len(mesh.faces) == 0:
         raise InputError(f"'{mesh.name}' has no faces")
     check_normalised(mesh)
