@@ -189,7 +189,9 @@ def load_constraints(options: JobOptions, names) -> None:
 
 
 def check_shapes(options: JobOptions, names: list[str], skipped: dict | None = None) -> None:
-    """What needs the analysable shapes: at least two, clusters <= shapes, constraint names known.
+    """What needs the analysable shapes: at least two, clusters <= shapes, constraint names known
+    and the constraints themselves sound (two styles or more, no contradictory triplets), and
+    with labels, clusters = labelled styles.
 
     `skipped` (name -> reason) explains names that were dropped."""
     skipped = skipped or {}
@@ -207,6 +209,17 @@ def check_shapes(options: JobOptions, names: list[str], skipped: dict | None = N
     if k is not None and k > len(names):
         raise InputError(f"--clusters {k} asks for more clusters than the {len(names)} "
                          "analysable shapes")
+    from .constraints import validate_labels, validate_triplets
+    if options.labels:                   # the panel's come as a dict, not through a CSV reader
+        validate_labels(options.labels)
+    if options.triplets:
+        validate_triplets(options.triplets)
+    styles = sorted(set((options.labels or {}).values()))
+    if k is not None and styles and k != len(styles):
+        # both methods make one cluster per labelled style: any other count would be ignored
+        raise InputError(f"--clusters {k} with labels of {len(styles)} styles "
+                         f"({', '.join(styles)}): with labels there is one cluster per labelled "
+                         f"style; leave --clusters out (or auto), or label shapes of {k} styles")
 
 
 COORDINATE_LIMIT = 1e30    # beyond this a coordinate is corrupt, whatever the unit

@@ -218,6 +218,19 @@ def test_suggestive_contours_need_freestyle():
     assert build_options(renderer="freestyle", suggestive_contours=True).suggestive_contours
 
 
+def test_clusters_and_labels_must_agree():
+    """With labels both methods make one cluster per labelled style, so another --clusters
+    would be ignored: refused, naming both."""
+    from style_coanalysis.meshes import InputError
+    from style_coanalysis.options import build_options, check_shapes
+    labels = {"a": "Ming", "b": "Qing", "c": "Ming"}
+    with pytest.raises(InputError, match=r"--clusters 3 with labels of 2 styles \(Ming, Qing\)"):
+        check_shapes(build_options(clusters=3, labels=labels), ["a", "b", "c", "d"])
+    check_shapes(build_options(clusters=2, labels=labels), ["a", "b", "c", "d"])
+    check_shapes(build_options(clusters="auto", labels=labels), ["a", "b", "c", "d"])
+    check_shapes(build_options(clusters=3), ["a", "b", "c", "d"])
+
+
 def test_help_defaults_come_from_params():
     from style_coanalysis.cli import build_parser
     from style_coanalysis.options import PARAMETERS, build_options

@@ -74,14 +74,16 @@ def fake(job, monkeypatch):
 def test_analyse_hands_constraints_and_settings_to_the_job(scene, fake):
     s = scene.style_coanalysis
     bpy.ops.style.label_add(name="Ming")
+    bpy.ops.style.label_add(name="Qing")
     bpy.data.objects["Chair_a"].style_coanalysis.label = "Ming"
+    bpy.data.objects["Table_b"].style_coanalysis.label = "Qing"
     bpy.data.objects["Table_a"].style_coanalysis.label = "Gone"       # not a label any more
     s.auto_clusters, s.n_clusters, s.eta, s.max_rounds, s.renderer = False, 2, 0.3, 2, "lineart"
     s.method = "paper"
     assert bpy.ops.style.analyse() == {"FINISHED"}
     (meshes, options), = fake.calls
     assert [m.name for m in meshes] == list(NAMES)
-    assert options.labels == {"Chair_a": "Ming"} and options.triplets is None
+    assert options.labels == {"Chair_a": "Ming", "Table_b": "Qing"} and options.triplets is None
     assert options.renderer == "lineart" and options.params.method == "paper"
     assert options.params.n_clusters == 2 and options.params.eta == pytest.approx(0.3)
     assert options.params.max_rounds == 2 and options.params.n_representatives == 50
@@ -92,6 +94,7 @@ def test_analyse_hands_constraints_and_settings_to_the_job(scene, fake):
     assert chair.vertex_groups.get("style_weight") is not None
     # triplets instead of labels
     bpy.data.objects["Chair_a"].style_coanalysis.label = ""
+    bpy.data.objects["Table_b"].style_coanalysis.label = ""
     bpy.ops.style.triplet_add(a="Chair_a", b="Chair_b", c="Table_a")
     assert bpy.ops.style.analyse() == {"FINISHED"}
     options = fake.calls[-1][1]
@@ -117,16 +120,26 @@ def test_operator_defaults_come_from_params(ext, scene):
 
 
 def test_bad_settings_are_refused_before_the_job_starts(scene, fake):
-    """Labels and triplets together, or more clusters than shapes: refused up front by the
-    same checks as the command line, and the job never starts (issue 12, item 4)."""
+    """Labels and triplets together, labels of one style, a cluster count the labels do not
+    make, or more clusters than shapes: refused up front by the same checks as the command
+    line, and the job never starts (issue 12, item 4)."""
     s = scene.style_coanalysis
     bpy.ops.style.label_add(name="Ming")
     bpy.data.objects["Chair_a"].style_coanalysis.label = "Ming"
     bpy.ops.style.triplet_add(a="Chair_a", b="Chair_b", c="Table_a")
     with pytest.raises(RuntimeError, match="labels or triplets, not both"):
         bpy.ops.style.analyse()
+    bpy.ops.style.triplet_remove()
+    with pytest.raises(RuntimeError, match="at least two different styles, found only 'Ming'"):
+        bpy.ops.style.analyse()                  # the pipeline would find it only after drawing
+    bpy.ops.style.label_add(name="Qing")
+    bpy.data.objects["Table_a"].style_coanalysis.label = "Qing"
+    s.auto_clusters, s.n_clusters = False, 3
+    with pytest.raises(RuntimeError, match="--clusters 3 with labels of 2 styles"):
+        bpy.ops.style.analyse()
     bpy.data.objects["Chair_a"].style_coanalysis.label = ""
-    s.auto_clusters, s.n_clusters = False, 5
+    bpy.data.objects["Table_a"].style_coanalysis.label = ""
+    s.n_clusters = 5
     with pytest.raises(RuntimeError, match="more clusters than the 4"):
         bpy.ops.style.analyse()
     assert fake.calls == []
