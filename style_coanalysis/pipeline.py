@@ -25,9 +25,11 @@ stable) but each stage is made to hold on collections it was not tuned on:
   plus the line character (views.py), fused as graphs (graph.py): no neighbour count or
   collection fraction is chosen for the collection at hand;
 * the number of clusters comes from the fused graph's spectral gap, at most N/4;
-* labels start the graph's cut from the labelled shapes (seeded k-means), or, where
-  leave-one-out says it predicts held-out labels better, decide which features matter first
-  (a discriminant fitted to the labelled shapes);
+* labels: with three or more of every style, they start the graph's cut from the labelled
+  shapes (seeded k-means), or, where leave-one-out says it predicts held-out labels better,
+  decide which features matter first (a discriminant fitted to the labelled shapes); with
+  fewer, the graph's own cut named by them is kept unless the seeded cut places more labelled
+  shapes in their style (`_label_transduction`);
   triplets constrain the graph's clustering (eq. 3), whose spectral start is the style graph
   itself with the constraints imposed (a 7-nearest graph rebuilt on its spectral coordinates
   moved with the load route: docs/generalisation.md);
