@@ -322,9 +322,12 @@ def test_crashed_worker_costs_one_retry_and_only_a_twice_failing_shape(tmp_path,
 
 # ---- 9. Ctrl-C with --jobs 2 stops the workers at once ------------------------------------------
 
-def _children(pid: int) -> set:
-    out = subprocess.run(["ps", "-o", "pid=", "--ppid", str(pid)], capture_output=True, text=True)
-    return {int(x) for x in out.stdout.split()}
+def _workers(pid: int) -> set:
+    """The drawing workers (multiprocessing's spawned children) of process `pid`."""
+    out = subprocess.run(["ps", "-ww", "-o", "pid=,args=", "--ppid", str(pid)],
+                         capture_output=True, text=True)      # -ww: whole command lines
+    return {int(line.split()[0]) for line in out.stdout.splitlines()
+            if "multiprocessing.spawn" in line}
 
 
 def _alive(pid: int) -> bool:
@@ -335,21 +338,24 @@ def _alive(pid: int) -> bool:
         return False
 
 
-def test_sigint_with_two_jobs_ends_the_workers_at_once(shapes, tmp_path):
+def test_sigint_with_two_jobs_ends_the_workers_at_once(tmp_path):
+    # 24 shapes, so the workers are still drawing when the signal comes on a fast machine too
+    # (6 shapes took 2 s in all on one, and a fixed wait let the render finish first)
+    res = run_cmd("sample", "--out", tmp_path / "s", "--size", 24, "--seed", 2)
+    assert res.returncode == 0, res.stderr[-2000:]
     proc = subprocess.Popen([sys.executable, "-m", "style_coanalysis", "analyze",
-                             str(shapes / "sample.blend"), "--out", str(tmp_path / "o"),
+                             str(tmp_path / "s" / "sample.blend"), "--out", str(tmp_path / "o"),
                              "--renderer", "freestyle", "--jobs", "2", "--cache",
                              str(tmp_path / "cache")], cwd=ROOT, stderr=subprocess.PIPE, text=True,
                             preexec_fn=_terminal_sigint)
     for line in proc.stderr:
-        if "] render 0/6" in line:
+        if re.search(r"\] render \d+/24 \('", line):      # a worker is inside a shape
             break
     deadline = time.monotonic() + 30
-    while len(_children(proc.pid)) < 2 and time.monotonic() < deadline:
-        time.sleep(0.2)
-    time.sleep(3.0)                  # the workers are drawing (about 2 s per shape here)
-    workers = _children(proc.pid)
-    assert len(workers) >= 2
+    while len(_workers(proc.pid)) < 2 and time.monotonic() < deadline:
+        time.sleep(0.05)
+    workers = _workers(proc.pid)
+    assert len(workers) == 2
     t0 = time.monotonic()
     proc.send_signal(signal.SIGINT)
     rest = proc.stderr.read()
