@@ -77,3 +77,20 @@ def test_normalised_frame_survives_scaling_and_a_file_round_trip(tmp_path):
             total += len(m.vertices)
     assert moved <= 0.01 * total, (moved, total)
     assert moved_unrounded >= 0.5 * total, (moved_unrounded, total)
+
+
+def test_where_a_shape_sits_changes_only_its_world_frame():
+    """`Mesh.origin` (an object's location, kept apart from its float32 coordinates) moves the
+    normalised frame's centre and nothing the drawings see; the same offset written into the
+    coordinates costs them bits, and some vertices move on the grid."""
+    from style_coanalysis.meshes import normalisation, normalise, up_to_z
+    m = sample.generate(1, seed=3)[0]
+    where = np.array([1000.0, -250.0, 40.0])
+    far = Mesh(m.name, m.vertices, m.faces, origin=where)
+    assert far.content_hash() == m.content_hash()
+    for up in ("z", "y"):
+        assert np.array_equal(normalise(far, up).vertices, normalise(m, up).vertices)
+        (c0, r0), (c, r) = normalisation(m, up), normalisation(far, up)
+        assert r == r0 and np.allclose(c - c0, up_to_z(where[None], up)[0])
+    baked = Mesh(m.name, m.vertices.astype(np.float64) + where, m.faces)
+    assert not np.array_equal(normalise(baked).vertices, normalise(m).vertices)

@@ -34,10 +34,47 @@ def test_round_trip_with_world_transform_and_truth(clean, shapes):
     src = shapes[0]
     assert back.name == names[0] == "stool_a"
     assert len(back.vertices) == len(src.vertices)       # vertex order kept: results map 1:1
-    assert np.allclose(back.vertices, src.vertices * [2, 2, 3] + [1, -2, 0.5], atol=1e-4)
+    assert np.allclose(back.vertices + back.origin, src.vertices * [2, 2, 3] + [1, -2, 0.5],
+                       atol=1e-4)
+    assert np.allclose(back.origin, [1, -2, 0.5])
     assert np.array_equal(np.sort(back.faces, axis=1), np.sort(src.faces, axis=1))
     assert back.truth["style"] == "turned" and back.truth["category"] == "stool"
     assert np.array_equal(back.truth["face_mask"], src.truth["face_mask"])
+
+
+def test_an_object_reads_the_same_wherever_it_sits(clean, shapes, tmp_path):
+    """An object's location is kept apart from its coordinates (Mesh.origin), so moving it, or
+    a .blend laying the shapes out on a grid, gives the same float32 vertices bit for bit."""
+    names = scene.objects_from_meshes(shapes, "Shapes")
+    obj = bpy.data.objects[names[0]]
+    obj.location = (1000.0, -250.0, 40.0)
+    moved = scene.mesh_from_object(obj, bpy.context.evaluated_depsgraph_get())
+    assert np.array_equal(moved.vertices, shapes[0].vertices)
+    assert moved.content_hash() == shapes[0].content_hash()          # the same drawings
+    assert np.allclose(moved.origin, [1000.0, -250.0, 40.0])
+    scene.write_blend(shapes, tmp_path / "grid.blend", "Grid")
+    back = {m.name: m for m in scene.meshes_from_blend(tmp_path / "grid.blend")}
+    assert all(np.array_equal(back[s.name].vertices, s.vertices) for s in shapes)
+    assert len({tuple(m.origin) for m in back.values()}) == len(shapes)   # laid out apart
+
+
+def test_parts_of_one_file_keep_their_places(clean, shapes, tmp_path):
+    """A file's mesh objects are joined into one shape where the file puts them (glTF nodes
+    carry their own translations): the parts keep their places relative to each other."""
+    names = scene.objects_from_meshes(shapes, "Export")
+    places = [(5.0, 0.0, 0.0), (-3.0, 2.0, 1.0)]
+    for n, p in zip(names, places):
+        bpy.data.objects[n].location = p
+        bpy.data.objects[n].select_set(True)
+    bpy.ops.export_scene.gltf(filepath=str(tmp_path / "two.glb"), use_selection=True,
+                              export_format="GLB")
+    bpy.ops.wm.read_factory_settings(use_empty=True)
+    got = scene.import_mesh_file(tmp_path / "two.glb")
+    world = got.vertices + got.origin
+    expected = np.concatenate([s.vertices + p for s, p in zip(shapes, places)])
+    assert len(got.faces) == sum(len(s.faces) for s in shapes)
+    assert np.allclose(world.min(0), expected.min(0), atol=1e-4)
+    assert np.allclose(world.max(0), expected.max(0), atol=1e-4)
 
 
 def test_blend_save_and_collections(clean, shapes, tmp_path):

@@ -18,7 +18,9 @@ MESH_EXTENSIONS = (".obj", ".ply", ".stl", ".gltf", ".glb")
 
 
 def mesh_from_object(obj, depsgraph) -> Mesh:
-    """Evaluated (modifiers applied) triangles of `obj` in world space."""
+    """Evaluated (modifiers applied) triangles of `obj` in world orientation and scale, relative
+    to the object's location (`Mesh.origin`): an object's own coordinates keep their float32
+    bits wherever it sits in the scene."""
     ev = obj.evaluated_get(depsgraph)
     me = ev.to_mesh()
     try:
@@ -28,7 +30,7 @@ def mesh_from_object(obj, depsgraph) -> Mesh:
         me.vertices.foreach_get("co", co)
         co = co.reshape(n, 3)
         mw = np.array(ev.matrix_world, dtype=np.float64)
-        world = co @ mw[:3, :3].T + mw[:3, 3]
+        placed = co @ mw[:3, :3].T
         m = len(me.loop_triangles)
         tris = np.empty(m * 3, np.int32)
         me.loop_triangles.foreach_get("vertices", tris)
@@ -45,8 +47,8 @@ def mesh_from_object(obj, depsgraph) -> Mesh:
             truth["face_mask"] = per_poly[poly]
     finally:
         ev.to_mesh_clear()
-    return Mesh(obj.name, world.astype(np.float32), tris.reshape(-1, 3), source=obj.name,
-                truth=truth)
+    return Mesh(obj.name, placed.astype(np.float32), tris.reshape(-1, 3), source=obj.name,
+                truth=truth, origin=mw[:3, 3])
 
 
 def meshes_from_blend(path, collection: str | None = None) -> list[Mesh]:
@@ -148,15 +150,20 @@ def import_mesh_file(path) -> Mesh:
         if not with_faces:
             # not an import failure: the shape exists but cannot be analysed; the job skips it
             # with a warning and lists it in the report
-            verts = np.concatenate([p.vertices for p in parts])
-            return Mesh(stem, verts, np.zeros((0, 3), np.int32), source=path)
+            return Mesh(stem, _joined(parts), np.zeros((0, 3), np.int32), source=path,
+                        origin=parts[0].origin)
         parts = with_faces
         offsets = np.cumsum([0] + [len(p.vertices) for p in parts[:-1]])
-        verts = np.concatenate([p.vertices for p in parts])
         faces = np.concatenate([p.faces + o for p, o in zip(parts, offsets)])
     finally:
         _remove_objects(new)
-    return Mesh(stem, verts, faces, source=path)
+    return Mesh(stem, _joined(parts), faces, source=path, origin=parts[0].origin)
+
+
+def _joined(parts) -> np.ndarray:
+    """The parts' vertices in one array, relative to the first part's origin."""
+    return np.concatenate([p.vertices.astype(np.float64) + (p.origin - parts[0].origin)
+                           for p in parts])
 
 
 def import_mesh_files(folder) -> list[Mesh]:
@@ -175,7 +182,8 @@ def import_mesh_files(folder) -> list[Mesh]:
 
 
 def objects_from_meshes(meshes, collection_name: str) -> list[str]:
-    """One object per mesh in a (new or existing) collection of the current scene. Truth goes
+    """One object per mesh, at the mesh's origin, in a (new or existing) collection of the
+    current scene. Truth goes
     to custom properties 'style'/'category' and the boolean face attribute 'style_truth'.
     Returns the object names Blender gave (they differ from mesh names on clashes)."""
     coll = bpy.data.collections.get(collection_name)
@@ -195,6 +203,7 @@ def objects_from_meshes(meshes, collection_name: str) -> list[str]:
         me.polygons.foreach_set("loop_start", np.arange(0, nf * 3, 3, dtype=np.int32))
         me.update()
         obj = bpy.data.objects.new(m.name, me)
+        obj.location = tuple(float(x) for x in m.origin)
         coll.objects.link(obj)
         for key in ("style", "category"):
             if key in m.truth:

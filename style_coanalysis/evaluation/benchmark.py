@@ -615,10 +615,11 @@ def variant_meshes(meshes, kind: str, workdir: str):
     from ..meshes import Mesh
     if kind == "scaled":
         return [Mesh(m.name, (m.vertices.astype(np.float64) * SCALE).astype(np.float32), m.faces,
-                     m.source, m.truth) for m in meshes]
+                     m.source, m.truth, m.origin * SCALE) for m in meshes]
     if kind == "turned":
-        return [Mesh(m.name, np.stack([-m.vertices[:, 1], m.vertices[:, 0], m.vertices[:, 2]],
-                                      axis=1), m.faces, m.source, m.truth) for m in meshes]
+        turn = lambda v: np.stack([-v[:, 1], v[:, 0], v[:, 2]], axis=1)
+        return [Mesh(m.name, turn(m.vertices), m.faces, m.source, m.truth, turn(m.origin[None])[0])
+                for m in meshes]
     from ..blender.render import quiet_fds
     with quiet_fds():          # Blender prints "Info: Saved ..." past sys.stdout
         return _variant_through_blender(meshes, kind, workdir)
