@@ -21,8 +21,8 @@ class Mesh:
     """A triangle mesh with a name. `truth` holds ground truth when the input carries it
     (keys: 'style', 'category', 'face_mask' (bool per face)); the analysis never reads it.
 
-    The vertices are relative to `origin` (world position = vertices + origin): a Blender
-    object's own coordinates with its rotation and scale applied, its location kept apart. In
+    The vertices are relative to `origin` (world position = vertices + origin); from a Blender
+    object, its own coordinates with its rotation and scale applied, its location kept apart. In
     world coordinates a shape 20 units from the world origin loses float32 bits to its
     position, and a few of its vertices then fall on the other side of the normalised frame's
     grid (`normalise`) and draw other pixels: the benchmark's shapes read back from a .blend,
@@ -138,10 +138,10 @@ def normalise(mesh: Mesh, up: str = "z") -> Mesh:
     Vertices are expected in world orientation and scale (the adapter applies object
     transforms first); where the shape sits (`Mesh.origin`) does not matter.
     Why the grid: the renderer redraws lines by a pixel for a change of a float32's last bit,
-    and the same shape scaled by 1.0000001, read back from an OBJ file (6 decimals) or from a
-    .blend is not the same bits (on 24 sample shapes: 19, 24 and 22 of them drew some other
-    pixels; with the grid 0, 2 and 3). The grid is a fortieth of a pixel of the 200 px
-    drawings, and about a hundred times a 6-decimal file's rounding of a 0.4-unit shape.
+    and the same shape scaled by 1.0000001 or read back from an OBJ file (6 decimals) is not
+    the same bits (on 24 sample shapes: 19 and 24 of them drew some other pixels; with the grid
+    0 and 2). The grid is a fortieth of a pixel of the 200 px drawings, and about a hundred
+    times a 6-decimal file's rounding of a 0.4-unit shape.
     """
     validate(mesh)
     v, c, r = _frame(mesh, up)          # the origin drops out: relative to the centroid

@@ -183,9 +183,9 @@ def import_mesh_files(folder) -> list[Mesh]:
 
 def objects_from_meshes(meshes, collection_name: str) -> list[str]:
     """One object per mesh, at the mesh's origin, in a (new or existing) collection of the
-    current scene. Truth goes
-    to custom properties 'style'/'category' and the boolean face attribute 'style_truth'.
-    Returns the object names Blender gave (they differ from mesh names on clashes)."""
+    current scene. Truth goes to custom properties 'style'/'category' and the boolean face
+    attribute 'style_truth'. Returns the object names Blender gave (they differ from mesh names
+    on clashes)."""
     coll = bpy.data.collections.get(collection_name)
     if coll is None:
         coll = bpy.data.collections.new(collection_name)
