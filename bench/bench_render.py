@@ -19,7 +19,7 @@ sys.path.insert(0, os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
 
 import bpy  # noqa: E402
 
-from style_coanalysis.blender.render import _bvh, draw_shape, ray_visibility, rig_for  # noqa: E402
+from style_coanalysis.blender.render import draw_shape, quarter_trees, ray_visibility, rig_for  # noqa: E402
 from style_coanalysis.meshes import Mesh, normalise  # noqa: E402
 from style_coanalysis.params import DrawingSettings  # noqa: E402
 
@@ -94,8 +94,8 @@ def compare(meshes: list[Mesh], title: str) -> None:
         f_zb.append(np.mean([f_score(ref.images[v] > INK, out["zbuffer"].images[v] > INK)
                              for v in range(ref.n_views)]))
         zb = out["zbuffer"]
-        rays = ray_visibility(_bvh(m), rig_for(sets["zbuffer"]), zb.seeds,
-                              own_face=zb.seed_faces)
+        rig = rig_for(sets["zbuffer"])
+        rays = ray_visibility(quarter_trees(m, rig), rig, zb.seeds, own_face=zb.seed_faces)
         vis.append(float((zb.seed_visible == rays).mean()))
         print(f"{m.name[:28]:28s} {len(m.faces):7d} " + " ".join(f"{took[r]:6.2f}" for r in RENDERERS)
               + f" {f_la[-1]:6.3f} {f_zb[-1]:6.3f} {vis[-1]:6.3f}", flush=True)

@@ -30,7 +30,7 @@ from .drawings import ShapeDrawings
 from .meshes import Mesh
 
 # Bump when the renderers, seeding or visibility change what they produce for the same input.
-CODE_VERSION = "drawings-4"
+CODE_VERSION = "drawings-5"
 # Bump when HOG maps or the analysis change in a way the source digests below would not see.
 HOG_VERSION = "hog-1"
 ANALYSIS_VERSION = "analysis-1"

@@ -86,11 +86,11 @@ def expected_lines(mesh, drawings, trim=0.12):
     Visibility of edge samples by ray casting a BVH of the mesh (the same kind of test the
     renderer uses for seeds, checked on its own in test_far_side_seed_is_invisible).
     """
-    from style_coanalysis.blender.render import _bvh, ray_visibility
+    from style_coanalysis.blender.render import quarter_trees, ray_visibility
     rig = Rig()
     edges, _ = feature_edges(mesh)
     pts = edge_samples(mesh, edges, trim=trim).reshape(-1, 3)
-    vis = ray_visibility(_bvh(mesh), rig, pts)
+    vis = ray_visibility(quarter_trees(mesh, rig), rig, pts)
     pix, _ = project(drawings.cameras, pts)
     return [(pix[v][vis[v]], pix[v][~vis[v]]) for v in range(len(pix))]
 
@@ -145,12 +145,12 @@ def test_ink_on_visible_edges_and_nowhere_else(drawn, shape, renderer):
 
 
 def test_far_side_seed_is_invisible():
-    from style_coanalysis.blender.render import _bvh, ray_visibility
+    from style_coanalysis.blender.render import quarter_trees, ray_visibility
     mesh = normalise(cube())
     h = float(mesh.vertices[:, 0].max())           # half-size after normalisation
     near_pt = [h, 0.0, 0.0]                        # centre of the +x face, facing camera 0
     far_pt = [-h, 0.0, 0.0]                        # centre of the -x face
-    vis = ray_visibility(_bvh(mesh), Rig(), np.array([near_pt, far_pt]))
+    vis = ray_visibility(quarter_trees(mesh, Rig()), Rig(), np.array([near_pt, far_pt]))
     assert vis[0].tolist() == [True, False]
     assert vis[6].tolist() == [False, True]        # camera 6 sits on the -x side
 
@@ -207,20 +207,38 @@ def test_renderers_agree(drawn, shape, other):
 def test_zbuffer_visibility_is_the_ray_casts(drawn, shape):
     """The depth buffers' visibility of surface points against a BVH ray cast per point and
     camera, on 2,000 points spread over the faces (the seeds' test)."""
-    from style_coanalysis.blender.render import _bvh, ray_visibility
-    from style_coanalysis.zbuffer import ShapeBuffers
+    from style_coanalysis.blender.render import quarter_buffers, quarter_trees, ray_visibility
     mesh, _ = drawn[shape, "zbuffer"]
     rng = np.random.default_rng(0)
     faces = rng.integers(0, len(mesh.faces), 2000)
     w = rng.dirichlet(np.ones(3), 2000)
     points = np.einsum("nk,nkd->nd", w, mesh.vertices[mesh.faces[faces]].astype(float))
     rig = Rig()
-    buffers = ShapeBuffers(mesh.vertices, mesh.faces, rig.matrices(), rig.locations(), 200,
-                           rig.focal_px)
-    seen = buffers.points_visible(points, own_face=faces)
-    rays = ray_visibility(_bvh(mesh), rig, points, own_face=faces)
+    seen = np.concatenate([b.points_visible(rig.into_quarter(points, q), own_face=faces)
+                           for q, b in enumerate(quarter_buffers(mesh, rig))])
+    rays = ray_visibility(quarter_trees(mesh, rig), rig, points, own_face=faces)
     assert 0.2 < rays.mean() < 0.8
     assert np.array_equal(seen, rays), (seen != rays).sum()
+
+
+@pytest.mark.parametrize("renderer", RENDERERS)
+def test_a_shape_turned_by_a_quarter_is_drawn_exactly_with_its_views_shifted(renderer):
+    """Turned by 90 degrees about the up axis, a shape's 12 views are the original's shifted by
+    three, to the bit: the drawings, the seeds' visibility and pixels, and the seeds themselves
+    turned (issue 11: the partition must not change when a user turns an asset)."""
+    from style_coanalysis.blender.render import draw_shape
+    from style_coanalysis.rig import quarter_turn
+    from style_coanalysis.sample import generate
+    shape = generate(size=6, seed=3)[5]
+    turned = Mesh(shape.name, quarter_turn(shape.vertices, 1), shape.faces)
+    settings = DrawingSettings(renderer=renderer, n_seeds=30)
+    a, b = (draw_shape(normalise(m), settings) for m in (shape, turned))
+    assert a.images.sum() > 100 and not np.array_equal(a.images, np.roll(a.images, 3, axis=0))
+    np.testing.assert_array_equal(b.images, np.roll(a.images, 3, axis=0))
+    np.testing.assert_array_equal(b.seeds, quarter_turn(a.seeds, 1))
+    np.testing.assert_array_equal(b.seed_faces, a.seed_faces)
+    np.testing.assert_array_equal(b.seed_visible, np.roll(a.seed_visible, 3, axis=0))
+    np.testing.assert_array_equal(b.seed_pixels, np.roll(a.seed_pixels, 3, axis=0))
 
 
 def test_zbuffer_open_surface_seen_from_behind():

@@ -5,7 +5,7 @@ import numpy as np
 import pytest
 
 from style_coanalysis.meshes import Mesh
-from style_coanalysis.rig import Rig, project
+from style_coanalysis.rig import Rig, project, quarter_turn
 
 
 def test_twelve_views_every_30_degrees_at_30_degrees_up():
@@ -46,6 +46,34 @@ def test_unit_sphere_stays_inside_the_image():
     assert pix.min() > 0 and pix.max() < 200
 
 
+def test_quarter_turns_are_exact_and_undo_each_other():
+    rng = np.random.default_rng(2)
+    pts = rng.normal(size=(500, 3)).astype(np.float32)
+    turned = quarter_turn(pts, 1)
+    assert turned.dtype == np.float32
+    assert np.allclose(turned, pts @ np.array([[0, -1, 0], [1, 0, 0], [0, 0, 1]]).T)
+    assert np.array_equal(quarter_turn(turned, -1), pts)
+    assert np.array_equal(quarter_turn(pts, 4), pts) and np.array_equal(quarter_turn(pts, -3), turned)
+    rig = Rig()
+    for q in range(4):      # the turned shape in quarter q + 1's frame is the shape in quarter q's
+        assert np.array_equal(rig.into_quarter(turned, (q + 1) % 4), rig.into_quarter(pts, q))
+
+
+@pytest.mark.parametrize("n_views", [12, 8, 5])
+def test_every_view_is_its_camera_seeing_the_shape_turned_into_it(n_views):
+    """`project_views` (a camera of the first quarter, the points turned by quarters: what the
+    renderers draw) is the projection of every view's own matrix; a rig whose views do not
+    fall on the axes every quarter turn places a camera for every view."""
+    rig = Rig(n_views=n_views)
+    assert rig.n_cameras == (n_views // 4 if n_views % 4 == 0 else n_views)
+    pts = np.random.default_rng(3).uniform(-0.7, 0.7, size=(100, 3))
+    pix, depth = rig.project_views(pts)
+    expected, exp_depth = project(rig.matrices(), pts)
+    assert np.allclose(pix, expected, atol=1e-9) and np.allclose(depth, exp_depth, atol=1e-12)
+    az = np.degrees(np.arctan2(rig.locations()[:, 1], rig.locations()[:, 0])) % 360
+    assert np.allclose(az, np.arange(n_views) * 360.0 / n_views)
+
+
 @pytest.mark.blender
 def test_blender_cameras_match_the_rig():
     bpy = pytest.importorskip("bpy")
@@ -58,9 +86,10 @@ def test_blender_cameras_match_the_rig():
     tri = Mesh("tri", [[0, 0, 0], [0.1, 0, 0], [0, 0.1, 0]], [[0, 1, 2]])
     rng = np.random.default_rng(1)
     pts = rng.uniform(-0.7, 0.7, size=(20, 3))
-    expected, depth = project(rig.matrices(), pts)
+    expected, depth = project(rig.camera_matrices(), pts)
     with TempScene(tri, rig) as ts:
         assert ts.scene.render.resolution_x == ts.scene.render.resolution_y == 200
+        assert len(ts.cameras) == rig.n_cameras == 3
         for v, cam in enumerate(ts.cameras):
             got = []
             for p in pts:

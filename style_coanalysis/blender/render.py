@@ -15,8 +15,10 @@ returns a `ShapeDrawings` (the "zbuffer" renderer makes no scene and casts no BV
   rasterised in numpy; the same silhouettes, borders and creases as Freestyle, and the seeds'
   visibility, are lookups in it. No suggestive contours.
 
-Cameras match `rig.Rig` exactly (location, orientation, horizontal field of view), so the rig's
+Cameras match the `rig.Rig`'s exactly (location, orientation, horizontal field of view), so its
 matrices describe the Blender renders to within a pixel (tested with `world_to_camera_view`).
+Every renderer draws view v with camera `rig.camera_of(v)` and the shape turned into the view's
+frame (`rig.into_quarter`): a shape turned by a quarter is drawn exactly as the original.
 """
 from __future__ import annotations
 
@@ -80,42 +82,52 @@ def quiet_fds():
 
 # ---------------------------------------------------------------- temporary scene
 class TempScene:
-    """A scene holding the mesh and the rig's cameras; `close()` removes every datablock made."""
+    """A scene holding the mesh and the rig's cameras; `close()` removes every datablock made.
+
+    The mesh object holds the shape turned into one quarter's frame at a time (`show_quarter`),
+    one mesh datablock per quarter."""
 
     def __init__(self, mesh: Mesh, rig: Rig):
         self._made: list = []           # (collection name, datablock name) in creation order
+        self.rig = rig
         self.scene = self._new("scenes", PREFIX + "scene")
         r = self.scene.render
         r.resolution_x = r.resolution_y = rig.image_size
         r.resolution_percentage = 100
         r.pixel_aspect_x = r.pixel_aspect_y = 1.0
-        self.mesh_object = self._mesh_object(mesh)
+        self.quarter_meshes = [self._mesh_data(rig.into_quarter(mesh.vertices, q), mesh.faces, q)
+                               for q in range(rig.quarters)]
+        self.mesh_object = self._new("objects", PREFIX + "shape", self.quarter_meshes[0])
+        self.scene.collection.objects.link(self.mesh_object)
         self.cameras = self._cameras(rig)
+
+    def show_quarter(self, quarter: int) -> None:
+        """Give the mesh object the shape turned into `quarter`'s frame."""
+        if self.mesh_object.data != self.quarter_meshes[quarter]:
+            self.mesh_object.data = self.quarter_meshes[quarter]
 
     def _new(self, collection: str, name: str, *args):
         block = getattr(bpy.data, collection).new(name, *args)
         self._made.append((collection, block.name))
         return block
 
-    def _mesh_object(self, mesh: Mesh):
-        me = self._new("meshes", PREFIX + "mesh")
-        n, m = len(mesh.vertices), len(mesh.faces)
+    def _mesh_data(self, vertices: np.ndarray, faces: np.ndarray, quarter: int):
+        me = self._new("meshes", f"{PREFIX}mesh{quarter}")
+        n, m = len(vertices), len(faces)
         me.vertices.add(n)
-        me.vertices.foreach_set("co", mesh.vertices.astype(np.float32).ravel())
+        me.vertices.foreach_set("co", vertices.astype(np.float32).ravel())
         me.loops.add(3 * m)
-        me.loops.foreach_set("vertex_index", mesh.faces.astype(np.int32).ravel())
+        me.loops.foreach_set("vertex_index", faces.astype(np.int32).ravel())
         me.polygons.add(m)
         me.polygons.foreach_set("loop_start", np.arange(0, 3 * m, 3, dtype=np.int32))
         me.update(calc_edges=True)
         # Renderers only: validation may drop degenerate faces, which the seeds never see.
         me.validate(verbose=False)
-        ob = self._new("objects", PREFIX + "shape", me)
-        self.scene.collection.objects.link(ob)
-        return ob
+        return me
 
     def _cameras(self, rig: Rig) -> list:
         cams = []
-        for i, (frame, loc) in enumerate(zip(rig.frames(), rig.locations())):
+        for i, (frame, loc) in enumerate(zip(rig.camera_frames(), rig.camera_locations())):
             data = self._new("cameras", f"{PREFIX}cam{i:02d}")
             data.type = "PERSP"
             data.sensor_fit = "HORIZONTAL"
@@ -233,10 +245,12 @@ def _render_freestyle_steps(ts: TempScene, settings: DrawingSettings, threads: i
         _setup_freestyle(ts, settings, threads)
     sc = ts.scene
     size = settings.image_size
-    images = np.zeros((len(ts.cameras), size, size), np.float32)
+    rig = ts.rig
+    images = np.zeros((rig.n_views, size, size), np.float32)
     with tempfile.TemporaryDirectory(prefix="sca_render_") as tmp:
-        for v, cam in enumerate(ts.cameras):
-            sc.camera = cam
+        for v in range(rig.n_views):
+            ts.show_quarter(rig.quarter_of(v))
+            sc.camera = ts.cameras[rig.camera_of(v)]
             path = os.path.join(tmp, f"view_{v:02d}.png")
             sc.render.filepath = path
             with quiet_fds() as log:
@@ -292,7 +306,7 @@ def _setup_lineart(ts: TempScene, settings: DrawingSettings):
         md.source_object = ts.mesh_object
         md.target_layer = layer.name
         md.target_material = mat
-        md.use_custom_camera = True          # one modifier per camera: one evaluation, 12 views
+        md.use_custom_camera = True          # one modifier per camera: one evaluation a quarter
         md.source_camera = cam
         md.use_cache = False
         md.use_contour = True
@@ -356,59 +370,71 @@ def rasterise_polylines(polylines_px, size: int) -> np.ndarray:
 
 
 def _render_lineart(ts: TempScene, settings: DrawingSettings, rig: Rig) -> np.ndarray:
+    """Every view: one evaluation of the modifiers (one per camera) for each quarter turn."""
     ob = _setup_lineart(ts, settings)
     view_layer = ts.scene.view_layers[0]
-    with quiet_fds():
-        view_layer.update()           # makes the scene's depsgraph and evaluates the modifiers
-    dg = view_layer.depsgraph
-    ev = ob.evaluated_get(dg)
-    layers = {layer.name: layer for layer in ev.data.layers}
-    mats = rig.matrices()
+    mats = rig.camera_matrices()
     size = settings.image_size
-    images = np.zeros((len(ts.cameras), size, size), np.float32)
-    for v in range(len(ts.cameras)):
-        layer = layers.get(f"view_{v:02d}")
-        frame = layer.current_frame() if layer is not None else None
-        if frame is None:
-            continue
-        lines3d = _drawing_polylines(frame.drawing)
-        lines_px = [project(mats[v:v + 1], pts)[0][0] for pts in lines3d]
-        images[v] = rasterise_polylines(lines_px, size)
+    images = np.zeros((rig.n_views, size, size), np.float32)
+    for q in range(rig.quarters):
+        ts.show_quarter(q)
+        with quiet_fds():
+            view_layer.update()       # (re)makes the scene's depsgraph, evaluates the modifiers
+        ev = ob.evaluated_get(view_layer.depsgraph)
+        layers = {layer.name: layer for layer in ev.data.layers}
+        for c in range(rig.n_cameras):
+            layer = layers.get(f"view_{c:02d}")
+            frame = layer.current_frame() if layer is not None else None
+            if frame is None:
+                continue
+            lines3d = _drawing_polylines(frame.drawing)
+            lines_px = [project(mats[c:c + 1], pts)[0][0] for pts in lines3d]
+            images[q * rig.n_cameras + c] = rasterise_polylines(lines_px, size)
     return images
 
 
 # ---------------------------------------------------------------- visibility
-def _bvh(mesh: Mesh) -> BVHTree:
-    return BVHTree.FromPolygons(mesh.vertices.tolist(), mesh.faces.tolist(), all_triangles=True)
+def quarter_trees(mesh: Mesh, rig: Rig) -> list[BVHTree]:
+    """A BVH tree of the shape turned into each quarter's frame (`rig.into_quarter`)."""
+    faces = mesh.faces.tolist()
+    return [BVHTree.FromPolygons(rig.into_quarter(mesh.vertices, q).tolist(), faces,
+                                 all_triangles=True) for q in range(rig.quarters)]
 
 
-def ray_visibility(tree: BVHTree, rig: Rig, points: np.ndarray, own_face=None) -> np.ndarray:
-    """(V, N) bool: is each point the first thing each camera's ray to it meets?
+def ray_visibility(trees: list, rig: Rig, points: np.ndarray, own_face=None) -> np.ndarray:
+    """(V, N) bool: is each point the first thing each view's camera ray to it meets?
 
-    A ray from the camera centre to the point counts it visible when it hits nothing (grazing
-    rays can slip past the point's own edge), hits at least the point's depth minus about one
-    pixel's worth of depth (`VISIBILITY_TOL_PX`; tighter loses points on their own triangles to
+    `trees` from `quarter_trees`: each view casts in its own frame, as it is drawn. A ray from
+    the camera centre to the point counts it visible when it hits nothing (grazing rays can
+    slip past the point's own edge), hits at least the point's depth minus about one pixel's
+    worth of depth (`VISIBILITY_TOL_PX`; tighter loses points on their own triangles to
     floating-point error), or hits the triangle the point lies on (`own_face`, one index per
     point).
     """
     points = np.asarray(points, np.float64).reshape(-1, 3)
     faces = None if own_face is None else np.asarray(own_face)
-    return np.stack([_ray_view(tree, loc, rig.focal_px, points, faces)
-                     for loc in rig.locations()]) if len(points) else \
-        np.zeros((rig.n_views, 0), bool)
+    if not len(points):
+        return np.zeros((rig.n_views, 0), bool)
+    locs = rig.camera_locations()
+    return np.stack([_ray_view(trees[rig.quarter_of(v)], locs[rig.camera_of(v)], rig.focal_px,
+                               rig.into_quarter(points, rig.quarter_of(v)), faces)
+                     for v in range(rig.n_views)])
 
 
-def ray_seen_by_any(tree: BVHTree, rig: Rig, points: np.ndarray, own_face) -> np.ndarray:
-    """(N,) bool: `ray_visibility(...).any(axis=0)`, casting each camera's rays only to the
-    points no earlier camera saw (the seeds' 2,000 candidates: about half the rays)."""
+def ray_seen_by_any(trees: list, rig: Rig, points: np.ndarray, own_face) -> np.ndarray:
+    """(N,) bool: `ray_visibility(...).any(axis=0)`, casting each view's rays only to the
+    points no earlier view saw (the seeds' 2,000 candidates: about half the rays)."""
     points = np.asarray(points, np.float64).reshape(-1, 3)
     faces = np.asarray(own_face)
+    locs = rig.camera_locations()
     seen = np.zeros(len(points), bool)
-    for loc in rig.locations():
+    for v in range(rig.n_views):
         rest = np.flatnonzero(~seen)
         if len(rest) == 0:
             break
-        seen[rest] = _ray_view(tree, loc, rig.focal_px, points[rest], faces[rest])
+        q = rig.quarter_of(v)
+        seen[rest] = _ray_view(trees[q], locs[rig.camera_of(v)], rig.focal_px,
+                               rig.into_quarter(points[rest], q), faces[rest])
     return seen
 
 
@@ -446,8 +472,8 @@ def draw_lines(mesh: Mesh, settings: DrawingSettings, threads: int = 0) -> np.nd
     check_normalised(mesh)
     rig = rig_for(settings)
     if settings.renderer == "zbuffer":
-        return ShapeBuffers(mesh.vertices, mesh.faces, rig.matrices(), rig.locations(),
-                            settings.image_size, rig.focal_px).lines(settings.crease_angle_deg)
+        return np.concatenate([b.lines(settings.crease_angle_deg)
+                               for b in quarter_buffers(mesh, rig)])
     with TempScene(mesh, rig) as ts:
         if settings.renderer == "freestyle":
             return _render_freestyle(ts, settings, threads)
@@ -457,20 +483,32 @@ def draw_lines(mesh: Mesh, settings: DrawingSettings, threads: int = 0) -> np.nd
 RENDERERS = ("freestyle", "lineart", "zbuffer")
 
 
+def quarter_buffers(mesh: Mesh, rig: Rig) -> list[ShapeBuffers]:
+    """The depth buffers of the shape turned into each quarter's frame, for its cameras: view v
+    is camera `rig.camera_of(v)` of buffers `rig.quarter_of(v)`."""
+    return [ShapeBuffers(rig.into_quarter(mesh.vertices, q), mesh.faces, rig.camera_matrices(),
+                         rig.camera_locations(), rig.image_size, rig.focal_px)
+            for q in range(rig.quarters)]
+
+
 def _zbuffer_steps(mesh: Mesh, settings: DrawingSettings, rig: Rig):
     """`draw_shape_steps` for the "zbuffer" renderer: every answer from one set of depth buffers."""
-    buffers = ShapeBuffers(mesh.vertices, mesh.faces, rig.matrices(), rig.locations(),
-                           settings.image_size, rig.focal_px)
+    buffers = quarter_buffers(mesh, rig)
     yield "depth buffers"
 
     def seen_somewhere(points, faces):
-        return buffers.points_seen_by_any(points, faces)
+        seen = np.zeros(len(points), bool)
+        for q, b in enumerate(buffers):
+            rest = np.flatnonzero(~seen)
+            seen[rest] = b.points_seen_by_any(rig.into_quarter(points[rest], q), faces[rest])
+        return seen
 
     seeds, seed_faces = sample_seeds(mesh, settings.n_seeds, settings.seed, keep=seen_somewhere)
-    seed_visible = buffers.points_visible(seeds, own_face=seed_faces)
+    seed_visible = np.concatenate([b.points_visible(rig.into_quarter(seeds, q), seed_faces)
+                                   for q, b in enumerate(buffers)])
     yield "seeds"
-    images = buffers.lines(settings.crease_angle_deg)
-    seed_pixels, _ = project(rig.matrices(), seeds)
+    images = np.concatenate([b.lines(settings.crease_angle_deg) for b in buffers])
+    seed_pixels, _ = rig.project_views(seeds)
     yield f"views {rig.n_views}/{rig.n_views}"
     return ShapeDrawings(
         name=mesh.name, images=images, cameras=rig.matrices(), seeds=seeds, seed_faces=seed_faces,
@@ -506,16 +544,16 @@ def draw_shape_steps(mesh: Mesh, settings: DrawingSettings, threads: int = 0):
     rig = rig_for(settings)
     if settings.renderer == "zbuffer":
         return (yield from _zbuffer_steps(mesh, settings, rig))
-    tree = _bvh(mesh)
+    trees = quarter_trees(mesh, rig)
     n_views = rig.n_views
 
     def seen_somewhere(points, faces):
-        return ray_seen_by_any(tree, rig, points, faces)
+        return ray_seen_by_any(trees, rig, points, faces)
 
     seeds, seed_faces = sample_seeds(mesh, settings.n_seeds, settings.seed, keep=seen_somewhere)
-    seed_visible = ray_visibility(tree, rig, seeds, own_face=seed_faces)
+    seed_visible = ray_visibility(trees, rig, seeds, own_face=seed_faces)
     yield "seeds"
-    seed_pixels, _ = project(rig.matrices(), seeds)
+    seed_pixels, _ = rig.project_views(seeds)
     with TempScene(mesh, rig) as ts:
         yield "scene"
         if settings.renderer == "freestyle":
