@@ -272,21 +272,29 @@ class ShapeBuffers:
     """One shape's depth buffers for every camera, and what they answer."""
 
     def __init__(self, vertices: np.ndarray, faces: np.ndarray, cameras: np.ndarray,
-                 locations: np.ndarray, size: int, focal_px: float):
+                 locations: np.ndarray, size: int, focal_px: float,
+                 turned_from: "ShapeBuffers | None" = None):
+        """`turned_from`: the buffers of the same faces with the vertices turned otherwise
+        (another quarter of the rig), whose topology and closed parts these share rather than
+        find again (a turn keeps both: each part's volume keeps its sign)."""
         self.vertices = np.asarray(vertices, np.float64)
         self.faces = np.asarray(faces, np.int64)
         self.cameras, self.locations = cameras, locations
         self.size, self.focal_px = size, focal_px
-        self.edges, self.edge_faces, edge_closed = edges_with_faces(self.faces)
-        self.neighbours = face_neighbours(self.edge_faces, len(self.faces))
         self.normals = face_normals(self.vertices, self.faces)
         corners = self.vertices[self.faces]
         self.centres = corners.mean(axis=1)
         self.triangles = (corners[:, 0], corners[:, 1] - corners[:, 0],
                           corners[:, 2] - corners[:, 0])
-        # a closed surface turned outwards is only ever seen from its front faces: the back
-        # faces can be left out of the buffers (half the work), which stay the same
-        self.closed = closed_outwards(self.vertices, self.faces, self.edge_faces, edge_closed)
+        if turned_from is not None:
+            self.edges, self.edge_faces = turned_from.edges, turned_from.edge_faces
+            self.neighbours, self.closed = turned_from.neighbours, turned_from.closed
+        else:
+            self.edges, self.edge_faces, edge_closed = edges_with_faces(self.faces)
+            self.neighbours = face_neighbours(self.edge_faces, len(self.faces))
+            # a closed surface turned outwards is only ever seen from its front faces: the back
+            # faces can be left out of the buffers (half the work), which stay the same
+            self.closed = closed_outwards(self.vertices, self.faces, self.edge_faces, edge_closed)
         pix, depth = project(cameras, self.vertices)
         self.buffers = []
         for v in range(len(cameras)):

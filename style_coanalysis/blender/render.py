@@ -486,9 +486,12 @@ RENDERERS = ("freestyle", "lineart", "zbuffer")
 def quarter_buffers(mesh: Mesh, rig: Rig) -> list[ShapeBuffers]:
     """The depth buffers of the shape turned into each quarter's frame, for its cameras: view v
     is camera `rig.camera_of(v)` of buffers `rig.quarter_of(v)`."""
-    return [ShapeBuffers(rig.into_quarter(mesh.vertices, q), mesh.faces, rig.camera_matrices(),
-                         rig.camera_locations(), rig.image_size, rig.focal_px)
-            for q in range(rig.quarters)]
+    out: list[ShapeBuffers] = []
+    for q in range(rig.quarters):
+        out.append(ShapeBuffers(rig.into_quarter(mesh.vertices, q), mesh.faces,
+                                rig.camera_matrices(), rig.camera_locations(), rig.image_size,
+                                rig.focal_px, turned_from=out[0] if out else None))
+    return out
 
 
 def _zbuffer_steps(mesh: Mesh, settings: DrawingSettings, rig: Rig):
