@@ -8,8 +8,9 @@ returns a `ShapeDrawings` (the "zbuffer" renderer makes no scene and casts no BV
   Cycles' rays and a transparent film: the PNG's alpha is the ink). Silhouettes, borders, dihedral
   creases, optionally suggestive contours (paper: DeCarlo et al. + dihedral feature lines).
 - "lineart" (fast): one Grease Pencil Line Art modifier per camera (each with its own custom
-  camera, so one depsgraph evaluation computes every view); the strokes' 3D points are projected
-  with the rig and rasterised as 1-pixel polylines. No render engine; no suggestive contours.
+  camera, so one depsgraph evaluation computes a quarter turn's views); the strokes' 3D points
+  are projected with the rig and rasterised as 1-pixel polylines. No render engine; no
+  suggestive contours.
 
 - "zbuffer" (fastest): no Blender at all (`zbuffer.ShapeBuffers`): one depth buffer per view
   rasterised in numpy; the same silhouettes, borders and creases as Freestyle, and the seeds'
@@ -531,8 +532,8 @@ def draw_shape_steps(mesh: Mesh, settings: DrawingSettings, threads: int = 0):
     """`draw_shape` as a generator of short steps, for Blender's main thread.
 
     Yields a short description of the step just done ("seeds", "view 3/12"); returns the
-    ShapeDrawings. Each step is the seeds (a few hundred ray casts), one rendered view or one
-    Line Art evaluation (all views at once, it is fast), so a caller that runs one step per UI
+    ShapeDrawings. Each step is the seeds (a few hundred ray casts), one rendered view or the
+    Line Art evaluations (all views at once, they are fast), so a caller that runs one step per UI
     event never blocks the interface for long. Closing the generator removes the temporary
     scene.
     """
