@@ -282,7 +282,9 @@ def test_the_goal_report_counts_what_the_issue_asks():
                     stability={"modes": ["k"], "variants": {"obj": {}}, "min_k": 0.93,
                                "commit": "abc"}),
         "four": coll(4, {"k": {"default": row(0.7, 0.3)}, "labels-2": {"default": row(0.6, 0.2)},
-                         "auto": {"default": row(0.45, 0.2, (4, 2, 4))}}, line=0.8)}}
+                         "auto": {"default": row(0.45, 0.2, (4, 2, 4))}}, line=0.8,
+                     stability={"modes": ["k", "auto"], "variants": {"obj": {}, "blend": {}},
+                                "min_k": 0.97, "min_auto": 1.0})}}
     lines = B.goal_report(res).splitlines()
     assert lines[0].startswith("Rows below the paper or a trivial baseline (mean style purity): "
                                "5 of 6")
@@ -293,7 +295,10 @@ def test_the_goal_report_counts_what_the_issue_asks():
     assert lines[3] == ("Automatic k right: 3 of 6 runs; at most N/4 clusters: 6 of 6; two-style "
                         "collections given 2 or 3 clusters: 2 of 3")
     assert lines[4] == "Stability two (obj; abc): below 0.95 in k 0.93"
-    assert lines[5].endswith("met here on: two")
+    assert lines[5] == ("Stability four (blend, obj; this run): at or above 0.95 in every mode "
+                        "measured")
+    assert lines[6] == "Stability >= 0.95 on every route and mode measured: 1 of 2 collections"
+    assert lines[7].endswith("met here on: two")
 
 
 def test_the_turned_variant_turns_every_shape_a_quarter_about_its_up_axis(tmp_path):

@@ -886,13 +886,18 @@ def goal_report(results: dict) -> str:
              f"{sum(cap)} of {len(cap)}; two-style collections given 2 or 3 clusters: "
              f"{sum(two_style)} of {len(two_style)}"]
     stab = {n: e["stability"] for n, e in results["collections"].items() if "stability" in e}
+    steady = 0
     for name, st in stab.items():
         worst = {m: st.get(f"min_{m}") for m in st.get("modes", STABILITY_MODES)}
         miss = [f"{m} {v:.2f}" for m, v in worst.items() if v is not None and v < GOAL_STABILITY]
+        steady += not miss
         kinds = sorted(st.get("variants", {}))
         lines.append(f"Stability {name} ({', '.join(kinds)}; {st.get('commit') or 'this run'}): "
                      + (f"below {GOAL_STABILITY} in {', '.join(miss)}" if miss else
                         f"at or above {GOAL_STABILITY} in every mode measured"))
+    if stab:
+        lines.append(f"Stability >= {GOAL_STABILITY} on every route and mode measured: {steady} "
+                     f"of {len(stab)} collections")
     lines.append(f"The held-out collections' goal (k given >= {GOAL_HELD_OUT['k']}, 2 labels "
                  f">= {GOAL_HELD_OUT['labels-2']}) met here on: {', '.join(held) or 'none'}")
     lines += firmness_lines(results)
