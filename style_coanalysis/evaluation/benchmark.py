@@ -28,10 +28,10 @@ n_seeds=90)`, the first 30 seeds kept for the analysis, through the user drawing
     and a stratified 25 of it, two styles (curvy, straight-lined) over tables, chairs and
     benches, shaped like the real collection of issue 11 (written from a spec by a helper that
     read neither the other generators nor the analysis);
-  * `collection4-60` and `collection4-styles-2`: `evaluation.collection4.generate(size=60,
+  * `collection4-60` and `collection4-styles-2-0..5`: `evaluation.collection4.generate(size=60,
     seed=0)`, buildings (houses, towers, halls) in four styles (gothic, classical, pagoda,
-    modernist), and 30 of them in two styles: a domain no other collection here comes from,
-    written from a spec the same way.
+    modernist), and every pair of its styles (30 buildings each): a domain no other collection
+    here comes from, written from a spec the same way.
 Modes: `k` (true number of styles), `auto`, `labels-2` (2 per style), `labels-10%`,
 `labels-20%` (every style at least once), `triplets-50`, `triplets-300` (label-derived:
 a and b share a style, c has another; k given). Seed s changes the label / triplet draw and
@@ -264,13 +264,15 @@ def collection_specs() -> dict:
                                "categories", lambda: list(_collection3_pool()))
     specs["collection3-25"] = ("third generated collection, 25 shapes, curvy or straight x 3 "
                                "categories", _subset(_collection3_pool, 25, 60))
-    # buildings, not furniture: 4 styles x 3 categories, and two of the styles (30 shapes,
-    # drawn from the 60, so from the same drawings in the cache)
+    # buildings, not furniture: 4 styles x 3 categories, and every pair of its styles (all 30
+    # buildings of the two, so the same drawings as the 60's)
     specs["collection4-60"] = ("fourth generated collection, 60 buildings, 4 styles x 3 "
                                "categories", lambda: list(_collection4_pool()))
-    specs["collection4-styles-2"] = ("fourth generated collection, 30 buildings, 2 styles x 3 "
-                                     "categories", _subset(_collection4_pool, 30, 61,
-                                                           keep_styles=2))
+    for i, pair in enumerate(itertools.combinations(("gothic", "classical", "pagoda",
+                                                     "modernist"), 2)):
+        specs[f"collection4-styles-2-{i}"] = (f"fourth generated collection, 30 buildings, "
+                                              f"{pair[0]} and {pair[1]} x 3 categories",
+                                              _subset(_collection4_pool, 30, 61, keep_styles=pair))
     # real two-style make-ups (as a user's "curvy or straight" collection): every pair of the
     # four styles, 60 shapes over the 5 categories
     hu_styles = ("Children", "European", "Japanese", "Ming")
