@@ -429,7 +429,7 @@ class _Facade:
         return out
 
 
-def _blocks(plan: dict, z0: float, main_size=None):
+def _blocks(plan: dict, z0: float):
     """The main block and the wing (or None) standing at z0."""
     w, d = plan["width"], plan["depth"]
     main = _Block(-w / 2, w / 2, -d / 2, d / 2, z0, plan["storeys"], plan["storey_h"],
