@@ -84,7 +84,6 @@ def validate(mesh: Mesh) -> None:
 
 
 NORMALISED_GRID = 2.0 ** -12     # normalised coordinates are multiples of this (`normalise`)
-FILE_DECIMALS = 6                # coordinates are read as an OBJ file holds them (`normalise`)
 
 
 def up_to_z(vertices: np.ndarray, up: str) -> np.ndarray:
@@ -109,7 +108,7 @@ def surface_centroid(vertices: np.ndarray, faces: np.ndarray) -> np.ndarray:
 def _frame(mesh: Mesh, up: str) -> tuple[np.ndarray, np.ndarray, float]:
     """The vertices in the +Z-up frame (relative to the origin), their surface centroid and
     the radius about it."""
-    v = up_to_z(np.round(mesh.vertices.astype(np.float64), FILE_DECIMALS), up)
+    v = up_to_z(mesh.vertices.astype(np.float64), up)
     c = surface_centroid(v, mesh.faces)
     return v, c, float(np.linalg.norm(v - c, axis=1).max())
 
@@ -143,12 +142,6 @@ def normalise(mesh: Mesh, up: str = "z") -> Mesh:
     the same bits (on 24 sample shapes: 19 and 24 of them drew some other pixels; with the grid
     0 and 2). The grid is a fortieth of a pixel of the 200 px drawings, and about a hundred
     times a 6-decimal file's rounding of a 0.4-unit shape.
-    Why the coordinates are first rounded to FILE_DECIMALS decimals (as they are, relative to
-    `Mesh.origin`): that is how OBJ exporters write them (`meshio.write_obj`, Blender's), so a
-    shape and its OBJ file normalise to the same bits; without it, a few vertices of most shapes
-    fell on the other side of the grid (sample-24: 18 of 24 shapes, 522 vertices; with it none).
-    The price is on the x 1.0000001 route, which the normalisation's scale otherwise cancels: 11
-    of sample-24's shapes have a vertex a grid step away (3 before; docs/generalisation.md).
     """
     validate(mesh)
     v, c, r = _frame(mesh, up)          # the origin drops out: relative to the centroid

@@ -54,10 +54,9 @@ def test_truth_of_mesh_without_truth(tmp_path):
 
 def test_normalised_frame_survives_scaling_and_a_file_round_trip(tmp_path):
     """The renderer redraws lines for a change of a float32's last bit, so `normalise` rounds
-    the frame to a grid, and the coordinates first to an OBJ file's 6 decimals: the same shape
-    written to an OBJ file and read back gives the same normalised vertices, bit for bit; scaled
-    by 1.0000001, the same but for the rare vertex that sat on a grid line, moved by one step.
-    Unrounded, most vertices differ."""
+    the frame to a grid: the same shape scaled by 1.0000001, or written to an OBJ file (6
+    decimals) and read back, gives the same normalised vertices but for the rare one that sat
+    on a grid line, moved by one step. Unrounded, most vertices differ."""
     from style_coanalysis.meshes import NORMALISED_GRID, normalisation, normalise
     moved, moved_unrounded, total = 0, 0, 0
     for m in sample.generate(8, seed=0):
@@ -68,9 +67,7 @@ def test_normalised_frame_survives_scaling_and_a_file_round_trip(tmp_path):
         meshio.write_obj(m, tmp_path / f"{m.name}.obj")
         c0, r0 = normalisation(m)
         unrounded = ((m.vertices.astype(np.float64) - c0) / r0).astype(np.float32)
-        read = meshio.read_obj(tmp_path / f"{m.name}.obj")
-        assert np.array_equal(normalise(read).vertices, ref.vertices)
-        for other in (scaled, read):
+        for other in (scaled, meshio.read_obj(tmp_path / f"{m.name}.obj")):
             d = np.abs(normalise(other).vertices.astype(np.float64) - ref.vertices).max(axis=1)
             assert d.max() <= NORMALISED_GRID * 1.01
             moved += int((d > 0).sum())
