@@ -204,6 +204,28 @@ class HogCache(_NpzStore):
         return self.store_arrays(key, {"maps": np.ascontiguousarray(maps, np.float32)})
 
 
+class VocabularyCache(_NpzStore):
+    """The default method's synthetic dictionaries (`vocabulary.words`) in `<root>/vocabulary/`."""
+
+    def __init__(self, root: str | os.PathLike | None = None):
+        super().__init__((Path(root) if root is not None else default_cache_dir()) / "vocabulary")
+
+    @staticmethod
+    def key(version: str, size: int, k: int, seed: int) -> str:
+        return hashlib.sha256(f"{version}:{size}:{k}:{seed}".encode()).hexdigest()
+
+    def load(self, key: str) -> np.ndarray | None:
+        arrays = self.load_arrays(key)
+        if arrays is None or "words" not in arrays or arrays["words"].dtype != np.float32:
+            if arrays is not None:
+                self.discard(key)
+            return None
+        return arrays["words"]
+
+    def store(self, key: str, words: np.ndarray) -> Path:
+        return self.store_arrays(key, {"words": np.ascontiguousarray(words, np.float32)})
+
+
 # ---------------------------------------------------------------- the analysis
 @functools.lru_cache(maxsize=None)
 def analysis_version() -> str:

@@ -6,8 +6,6 @@ pixel) changes the draws of all that follow. A hash of an item's own identity do
 (issue 11). SplitMix64's finaliser mixes the parts."""
 from __future__ import annotations
 
-import hashlib
-
 import numpy as np
 
 _GOLDEN = (0x9E3779B97F4A7C15, 0xD1B54A32D192ED03, 0xBF58476D1CE4E5B9, 0x94D049BB133111EB)
@@ -31,7 +29,3 @@ def uniform(*parts) -> np.ndarray:
             x = x ^ (np.asarray(p).astype(np.uint64) * np.uint64(g))
     return (mix64(x) >> np.uint64(11)).astype(np.float64) / float(1 << 53)
 
-
-def name_id(name: str) -> int:
-    """A 63-bit integer from a text (a shape's name), the same on every machine and run."""
-    return int.from_bytes(hashlib.blake2b(name.encode(), digest_size=8).digest(), "little") >> 1

@@ -1,14 +1,14 @@
 """Style regions on the surface (paper 4.5, "Style patch extraction") and style-aware best view.
 
-The style filters of a cluster are words of the shared dictionary (real patches of a few
-shapes). To find where a shape carries its cluster's style, every inked window of every one of
-its drawings is matched to its most similar word of the WHOLE dictionary (the same assignment
-the encoding counts); a window is a style window when that word is a style filter of the
-shape's cluster and the similarity reaches `threshold`. Matching against the whole dictionary,
-not just the style filters, is what keeps generic corners and edges out: they are claimed by
-the generic words. This dense matching extends the paper's seed patches to regions (its
-decimation application took three times as many seeds for the same purpose): every window
-position is a candidate, so regions are not limited to where 30 or 90 seeds happened to fall.
+The style filters of a cluster are words of the shared dictionary (line patterns, the same for
+every view). To find where a shape carries its cluster's style, every inked window of every one
+of its drawings is matched to its most similar word of the WHOLE dictionary (the same assignment
+the encoding counts); a window is a style window when that word is a style filter of the shape's
+cluster and the similarity reaches `threshold`. Matching against the whole dictionary, not just
+the style filters, is what keeps generic corners and edges out: they are claimed by the generic
+words. This dense matching extends the paper's seed patches to regions (its decimation
+application took three times as many seeds for the same purpose): every window position is a
+candidate, so regions are not limited to where 30 or 90 seeds happened to fall.
 
 Which surface the style windows mark is decided per face by `regions` (the windows' cover and
 the carved regions their strokes lie in); a vertex's weight, the `style_weight` group, is the

@@ -34,9 +34,9 @@ class AnalysisParams:
     method: str = "default"              # "default" or "paper" (sections 3-4.5 as written)
     patch_size: int = 24                 # pixels, the first dictionary's style words (the result's)
     other_patch_sizes: tuple[int, ...] = (16, 32)  # pixels, the other dictionaries', in turn
-    n_representatives: int = 50          # k-means centres of the layout (structure) dictionary
-    n_words: int = 200                   # k-means centres of the style dictionary (all views)
-    n_dictionaries: int = 5              # dictionaries drawn independently; their graphs averaged
+    n_representatives: int = 50          # layout words (the paper: k-means centres per view)
+    n_words: int = 200                   # style words of each synthetic vocabulary (all views)
+    n_dictionaries: int = 5              # vocabularies of their own seeds; their graphs averaged
     structure_patch_size: int = 48       # pixels, layout patches used to find structural look-alikes
     n_style_dims: int = 10               # principal directions kept per view; spectral coordinates
     min_filters: int = 5                 # reselection keeps at least this many words per dictionary

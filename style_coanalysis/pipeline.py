@@ -1,7 +1,8 @@
 """The whole analysis in one call (paper 4.1-4.5): drawings in, style clusters and style words out.
 
-    patches (24, 16, 32 px) -> HOG maps -> several dictionaries of style words, each for all views
-    -> per shape and dictionary: word profile, layout profile (48 px words); line character
+    HOG maps -> counts of several synthetic dictionaries of style words (24, 16, 32 px; each for
+    all views) -> per shape and dictionary: word profile, layout profile (48 px words); line
+    character
     -> [views (views.word_views, line character) -> style graph (graph.py; after the first
         round, averaged with the first round's) -> clusters
         -> reselect each dictionary's words]*
@@ -11,16 +12,17 @@ every figure of the default is compared with.
 
 Why not the paper's pipeline as written: on the sample it clustered by category (style purity
 0.25, category 0.80), and on real furniture and the voxel set it scored below trivial line
-statistics (README, "where it departs from the paper"). The default keeps its stages (patches,
-HOG, representative patches, encoding, fusion of several views, clustering, reselection until
+statistics (README, "where it departs from the paper"). The default keeps its stages (HOG,
+representative patches, encoding, fusion of several views, clustering, reselection until
 stable) but each stage is made to hold on collections it was not tuned on:
 * dictionaries of small patches for all views, counted over all views (shapes are upright but
-  not azimuth-aligned; ornament is small at 200 px); several are drawn independently
-  (`params.n_dictionaries`) and every one's views enter the style graph, so the cut does not
-  hang on which patches one draw happened to pick (where the cut is ambiguous, a few words
-  redrawn by a 1e-7 change of coordinates moved it: issue 11, README); they are cut at more
-  than one patch size (`params.dictionary_patch_size`), since no one size held on every
-  collection (encoding.py);
+  not azimuth-aligned; ornament is small at 200 px), drawn from synthetic line drawings rather
+  than the collection (vocabulary.py), so a shape's profile depends on its own drawings only (a
+  dictionary drawn from the collection changed every shape's words when a 1e-7 change of
+  coordinates redrew a few pixels of a few shapes, and where the cut is ambiguous moved it:
+  issue 11, README); several, of their own seeds (`params.n_dictionaries`) and at more than
+  one patch size (`params.dictionary_patch_size`, since no one size held on every collection:
+  encoding.py), and every one's views enter the style graph;
 * the views are the word profile relative to structural look-alikes at every scale of a ladder,
   plus the line character (views.py), fused as graphs (graph.py): no neighbour count or
   collection fraction is chosen for the collection at hand;
@@ -56,17 +58,15 @@ from scipy.optimize import linear_sum_assignment
 from sklearn.cluster import KMeans
 from sklearn.preprocessing import normalize
 
-from . import graph
+from . import graph, vocabulary
 from .constraints import labels_to_array, triplets_to_array, validate_labels, validate_triplets
 from .drawings import ShapeDrawings
-from .encoding import (DescriptorDraw, FilterBank, frequency_features, home_views,
-                       shape_word_counts)
-from .features import MapStore, hog_images, line_character
+from .encoding import FilterBank, frequency_features, shape_word_counts
+from .features import PIXELS_PER_CELL, MapStore, hog_images, line_character
 from .hashing import uniform
 from .meshes import InputError
 from .metrics import ari
 from .params import AnalysisParams
-from .patches import extract_patches
 from .progress import Progress
 from .reselection import reselect
 from .views import look_alikes, neighbour_ladder, structure_relative, style_space, word_views
@@ -76,7 +76,9 @@ FUSIONS = ("graph", "pslf", "concat", "pca", "cca")
 
 @dataclass
 class StyleFilter:
-    """A kept filter: a real patch (source shape/seed/pixel in its view) and the style it marks."""
+    """A kept word and the style it marks, shown by a window of the collection (source shape,
+    view, pixel; the paper's filters are that patch, cut at `source_seed`; the default's words
+    are synthetic, shown by the window most like them, source_seed -1)."""
 
     cluster: int
     view: int
@@ -424,11 +426,11 @@ def _dictionary_agreement(dicts, lines, params, clusters, n_clusters: int) -> fl
     """How firmly the drawings hold an unsupervised result: the mean ARI between `clusters` and
     each dictionary's own cut into as many clusters (its every word's views and the line
     character, fused as the style graph is). Where the cut is one of several the data support
-    about equally, independent draws of the words cut differently; that is also where another
-    analysis seed or a re-exported file regroups shapes. On the generalisation benchmark (27
-    collections, 3 seeds, k given) 15 of the 16 runs at 0.8 or more were at least 0.9 pure in
-    style, 5 of the 65 below (README, "The report"; report.FIRM). None with one dictionary or
-    one cluster."""
+    about equally, dictionaries of other seeds and patch sizes cut differently; that is also
+    where another analysis seed or a re-exported file regroups shapes. On the generalisation
+    benchmark (36 collections, 3 seeds, k given) 24 of the 33 runs at 0.8 or more were at least
+    0.9 pure in style, 10 of the 75 below (README, "The report"; report.FIRM). None with one
+    dictionary or one cluster."""
     if len(dicts) < 2 or n_clusters < 2:
         return None
     cuts = []
@@ -472,106 +474,111 @@ def dictionary_state(random_state: int, member: int) -> int:
     return int(uniform(int(random_state) & 0xFFFFFFFF, member) * 2 ** 31)
 
 
-def encode(drawings, params: AnalysisParams, maps=None, progress=None) -> Encoding:
-    """Patches -> HOG maps -> dictionaries -> word, layout and line profiles of every shape.
+def encode(drawings, params: AnalysisParams, maps=None, progress=None,
+           cache_dir=None) -> Encoding:
+    """HOG maps -> word, layout and line profiles of every shape.
 
-    `params.n_dictionaries` dictionaries are drawn independently (different seeds, so different
-    patches and k-means starts), each a pair: style words (at its patch size,
-    `params.dictionary_patch_size`: 24, 16, 32, 24, 16 px) and layout words (48 px, at the
-    first size's seeds, so every dictionary's look-alikes come from the same patches).
-    Two passes over the shapes, one shape at a time, so memory does not grow with the HOG maps:
-    1. each shape's maps (kept in a temporary `MapStore` unless `maps`, a sequence of per-shape
-       maps, is given), its line character, and its inked patches offered to every dictionary
-       draw (`DescriptorDraw`: a bounded draw by place);
-    2. the dictionaries (k-means), then each shape's word and layout profiles from its maps.
-    `drawings` may be any sequence of ShapeDrawings, read in order, one at a time."""
+    `params.n_dictionaries` dictionaries, each a pair of synthetic vocabularies
+    (`vocabulary.words`, drawn with the dictionary's seed): style words at its patch size
+    (`params.dictionary_patch_size`: 24, 16, 32, 24, 16 px) and layout words (48 px). Nothing
+    in them comes from the collection, so a shape's profiles depend on its own drawings only.
+    One pass over the shapes, one at a time, so memory does not grow with the HOG maps: each
+    shape's maps (kept in a temporary `MapStore` unless `maps`, a sequence of per-shape maps, is
+    given), its line character and its word counts. The first dictionary's words are shown
+    through the collection's window most like each (`FilterBank`: shape, view, pixel).
+    `drawings` may be any sequence of ShapeDrawings, read in order, one at a time; `cache_dir`:
+    where the vocabularies are kept (`vocabulary.words`)."""
     prog = Progress.wrap(progress)
     n = len(drawings)
     if params.n_dictionaries < 1:
         raise InputError(f"need at least one dictionary, got n_dictionaries={params.n_dictionaries}")
     states = [dictionary_state(params.random_state, m) for m in range(params.n_dictionaries)]
     sizes = [params.dictionary_patch_size(m) for m in range(params.n_dictionaries)]
-    timings = {"patches": 0.0, "hog": 0.0}
+    t = time.perf_counter()
+    prog.step("representatives", 0, 1)
+    banks = [(vocabulary.words(size, params.n_words, rs, cache_dir),
+              vocabulary.words(params.structure_patch_size, params.n_representatives, rs + 1,
+                               cache_dir))
+             for size, rs in zip(sizes, states)]
+    timings = {"representatives": time.perf_counter() - t, "hog": 0.0, "encode": 0.0}
+    counts = [(np.zeros((n, len(b))), np.zeros((n, len(lb)))) for b, lb in banks]
+    # the dictionaries of one patch size are matched together (their windows cut once)
+    groups = [[j for j, s in enumerate(sizes) if s == size] for size in dict.fromkeys(sizes)]
+    k0 = len(banks[0][0])
+    near = (np.full(k0, -np.inf), *(np.zeros(k0, np.int64) for _ in range(4)))
     store = MapStore() if maps is None else None
     source = store if store is not None else maps       # where each shape's maps are read
+    lines, inked = [], False
     try:
-        draws = [(DescriptorDraw(size, salt=1 + rs),
-                  DescriptorDraw(params.structure_patch_size, salt=2 + rs))
-                 for size, rs in zip(sizes, states)]
-        lines, n_patches = [], 0
         for i, d in enumerate(drawings):
-            prog.step("hog" if store is not None else "patches", i, n)
             t = time.perf_counter()
             if store is not None:
+                prog.step("hog", i, n)
                 store.append(hog_images(d.images))
             m = source[i]
             timings["hog"] += time.perf_counter() - t
-            t = time.perf_counter()
-            # the patches at each size's seeds (a seed whose window is blank at one size may
-            # not be at another); the layout words are drawn at the first size's seeds
-            found = {size: extract_patches([d], size=size) for size in dict.fromkeys(sizes)}
-            n_patches += len(found[sizes[0]])
-            home = home_views(d.seeds, d.n_views)
-            for (word_draw, layout_draw), size in zip(draws, sizes):
-                for draw, p in ((word_draw, found[size]), (layout_draw, found[sizes[0]])):
-                    draw.add(m, i, d.name, p.view, p.seed, p.centre, home)
-            lines.append(line_character(m))
-            timings["patches"] += time.perf_counter() - t
-        if n_patches == 0:
-            raise InputError("no patch with ink in any drawing: the shapes drew no lines")
-
-        t = time.perf_counter()
-        banks = []
-        for j, ((word_draw, layout_draw), rs) in enumerate(zip(draws, states)):
-            prog.step("representatives", j, len(states))
-            banks.append((word_draw.bank(params.n_words, rs),
-                          layout_draw.bank(params.n_representatives, rs + 1)))
-        timings["representatives"] = time.perf_counter() - t
-        if len(banks[0][0]) == 0:
-            raise InputError("no patch with ink in any drawing: the shapes drew no lines")
-
-        t = time.perf_counter()
-        counts = [(np.zeros((n, len(b))), np.zeros((n, len(lb)))) for b, lb in banks]
-        # the dictionaries of one patch size are matched together (their windows cut once)
-        groups = [[j for j, s in enumerate(sizes) if s == size] for size in dict.fromkeys(sizes)]
-        for i in range(n):
             prog.step("encode", i, n)
-            m = source[i]
+            t = time.perf_counter()
+            lines.append(line_character(m))
+            inked = inked or bool(np.asarray(m).max() > 0)
             for group in groups:
-                words_i = shape_word_counts(m, [banks[j][0].hog for j in group])
+                words_i, best_i = shape_word_counts(m, [banks[j][0] for j in group], best=True)
                 for j, w in zip(group, words_i):
                     counts[j][0][i] = w.sum(axis=0)
-            layout_i = shape_word_counts(m, [lb.hog for _, lb in banks])
+                if group[0] == 0:                   # the shown dictionary: its best windows
+                    cos, view, row, col = best_i[0]
+                    better = cos > near[0]
+                    for arr, val in zip(near, (cos, np.full(k0, i), view, row, col)):
+                        arr[better] = val[better]
+            layout_i = shape_word_counts(m, [lb for _, lb in banks])
             for (_, lc), lw in zip(counts, layout_i):
                 lc[i] = lw.sum(axis=0)
+            timings["encode"] += time.perf_counter() - t
     finally:
         if store is not None:
             store.close()
+    if not inked:
+        raise InputError("no patch with ink in any drawing: the shapes drew no lines")
     # what reselection scores a word by: how much more of it a shape has than its look-alikes,
     # averaged over the ladder's scales
+    t = time.perf_counter()
     ks = neighbour_ladder(n)
     k_far = max([k for k in ks if k < n - 1], default=0)
     dictionaries = []
-    for (bank, _), (c, lc) in zip(banks, counts):
-        words = frequency_features(c[:, None])
-        neighbours = look_alikes(frequency_features(lc[:, None]), k_far)   # by layout profile
-        rungs = structure_relative(words, neighbours, ks)
-        dictionaries.append(Dictionary(bank, rungs, np.mean(rungs, axis=0)))
-    timings["encode"] = time.perf_counter() - t
+    for j, ((words, _), (c, lc)) in enumerate(zip(banks, counts)):
+        shown = _shown_bank(words, near, sizes[0]) if j == 0 else _shown_bank(words)
+        rungs = structure_relative(frequency_features(c[:, None]),
+                                   look_alikes(frequency_features(lc[:, None]), k_far), ks)
+        dictionaries.append(Dictionary(shown, rungs, np.mean(rungs, axis=0)))
+    timings["encode"] += time.perf_counter() - t
     return Encoding(dictionaries, np.stack(lines), timings)
+
+
+def _shown_bank(words: np.ndarray, near=None, size: int = 0) -> FilterBank:
+    """The words as a FilterBank; with `near` (best cosine, shape, view, block row, block column
+    per word), each word's shape, view and pixel are the collection's window most like it."""
+    k = len(words)
+    if near is None:
+        z = np.full(k, -1, np.int64)
+        return FilterBank(words, z, z, z, np.zeros((k, 2), np.float32))
+    _, shape, view, row, col = near
+    pixel = np.stack([col * PIXELS_PER_CELL + size // 2, row * PIXELS_PER_CELL + size // 2],
+                     axis=1).astype(np.float32)
+    return FilterBank(words, view.copy(), shape.copy(), np.full(k, -1, np.int64), pixel)
 
 
 def analyse(drawings: list[ShapeDrawings], params: AnalysisParams,
             labels: dict | None = None, triplets: list | None = None, fusion: str = "graph",
             progress=None, cancel=None, maps: np.ndarray | None = None,
-            encoded: Encoding | None = None) -> AnalysisResult:
+            encoded: Encoding | None = None, cache_dir=None) -> AnalysisResult:
     """Cluster shapes by style and find their style words (unsupervised, labels or triplets).
 
     `maps`: the drawings' HOG maps (a sequence of (V, by, bx, C)) when the caller has them (the job
     reuses them to find style regions); computed here otherwise. `encoded`: the collection's
     `encode` with the same drawings and parameters, when the caller runs several analyses of
     one collection (the benchmark's modes). `fusion` replaces the style graph's fusion for
-    comparisons (FUSIONS)."""
+    comparisons (FUSIONS). `cache_dir`: where the default's vocabularies are kept (None: the
+    user cache; False: nowhere)."""
     if params.method == "paper":
         from .paper_method import analyse_paper
         return analyse_paper(drawings, params, labels, triplets, progress, cancel, maps)
@@ -584,7 +591,7 @@ def analyse(drawings: list[ShapeDrawings], params: AnalysisParams,
     if n_clusters is not None and y is None and not 1 <= n_clusters <= n:
         raise InputError(f"asked for {n_clusters} clusters but there are only {n} shapes")
     if encoded is None:
-        encoded = encode(drawings, params, maps, prog)
+        encoded = encode(drawings, params, maps, prog, cache_dir)
     timings = dict(encoded.timings)
     dicts, lines = encoded.dictionaries, encoded.lines
     # what a linear discriminant weighs when labels are given (_label_transduction): the first

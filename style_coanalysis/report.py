@@ -2,10 +2,10 @@
 
 The page is read by looking: a summary in words at the top, a map of the shapes by style, a
 confusion table against the given labels (and the ground truth when the input carries it), then
-per cluster a strip of its most typical shapes, a gallery of its style patches (the real 2D
-patches, with the shape and view they came from) and every member's best view with the matched
-style patches boxed beside a shaded view of its style regions, and last the shapes the analysis
-is least sure of. Images are PNG files beside the page (images/): it needs no server and no
+per cluster a strip of its most typical shapes, a gallery of its style patches (each word shown
+by the window of the drawings most like it, with its shape and view) and every member's best
+view with the matched style patches boxed beside a shaded view of its style regions, and last
+the shapes the analysis is least sure of. Images are PNG files beside the page (images/): it needs no server and no
 network. Everything is drawn with PIL, which the extension already bundles (scikit-image needs
 it), so the same report comes out of the panel inside Blender, where matplotlib is not there.
 The shaded view is a painter's-algorithm fill of the projected triangles: enough for a
@@ -172,8 +172,8 @@ def cluster_count_note(report: dict) -> str:
 
 
 # the dictionaries' agreement (pipeline._dictionary_agreement) at or above which clusters are
-# called firm: on the generalisation benchmark (27 collections, 3 seeds, k given) 15 of the 16
-# runs at or above it were at least 0.9 pure in style, 5 of the 65 below (README, "The report")
+# called firm: on the generalisation benchmark (36 collections, 3 seeds, k given) 24 of the 33
+# runs at or above it were at least 0.9 pure in style, 10 of the 75 below (README, "The report")
 FIRM = 0.8
 
 
@@ -335,8 +335,9 @@ def write_html(job, meshes_normalised, out_dir, title="Style co-analysis", progr
                      + "".join(thumb(names[i]) for i in members[:TYPICAL]))
         gallery = _patch_gallery(c["id"], filters, job, img_dir, patch)
         if gallery:
-            parts.append("<p>Its style patches: the line patches that tell this cluster from the "
-                         "others, cut from the drawings they were found in:</p>" + gallery)
+            parts.append("<p>Its style patches: the line patterns that tell this cluster from the "
+                         "others, each shown by the window of the drawings most like it:</p>"
+                         + gallery)
         parts.append(f"<details open><summary>All {c['size']} members: best view with the style patches "
                      "boxed, and the style regions in orange</summary>"
                      + "".join(thumb(n, 200, both=True) for n in c["members"]) + "</details>")

@@ -204,7 +204,7 @@ def _run_steps(meshes: list[Mesh], options: JobOptions):
         result = yield from _in_thread(
             lambda: pipeline.analyse(analysis_drawings, options.params, labels=options.labels,
                                      triplets=options.triplets, progress=progress,
-                                     cancel=stop, maps=maps),
+                                     cancel=stop, maps=maps, cache_dir=options.cache_dir),
             box, cancel_flag)
         for k, v in (result.timings or {}).items():
             timings[f"analyse.{k}"] = v
