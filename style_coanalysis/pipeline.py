@@ -495,11 +495,16 @@ def encode(drawings, params: AnalysisParams, maps=None, progress=None,
     states = [dictionary_state(params.random_state, m) for m in range(params.n_dictionaries)]
     sizes = [params.dictionary_patch_size(m) for m in range(params.n_dictionaries)]
     t = time.perf_counter()
-    prog.step("representatives", 0, 1)
-    banks = [(vocabulary.words(size, params.n_words, rs, cache_dir),
-              vocabulary.words(params.structure_patch_size, params.n_representatives, rs + 1,
-                               cache_dir))
-             for size, rs in zip(sizes, states)]
+    # style and layout words of each dictionary; some seconds each the first time, then read
+    # from the cache: one step each, so a first run shows progress and can be cancelled here
+    specs = [spec for size, rs in zip(sizes, states)
+             for spec in ((size, params.n_words, rs),
+                          (params.structure_patch_size, params.n_representatives, rs + 1))]
+    made = []
+    for j, spec in enumerate(specs):
+        prog.step("representatives", j, len(specs))
+        made.append(vocabulary.words(*spec, cache_dir))
+    banks = list(zip(made[0::2], made[1::2]))
     timings = {"representatives": time.perf_counter() - t, "hog": 0.0, "encode": 0.0}
     counts = [(np.zeros((n, len(b))), np.zeros((n, len(lb)))) for b, lb in banks]
     # the dictionaries of one patch size are matched together (their windows cut once)

@@ -56,7 +56,7 @@ def test_unsupervised_finds_style_above_chance(collection, unsupervised):
     assert purity(result.clusters, styles) > chance + 0.1
     assert result.confidence.shape == (n,) and 0 <= result.confidence.min() <= result.confidence.max() <= 1
     assert result.predicted is None and not result.label_given.any()
-    # the final style words: real patches of the dictionary, each marking one cluster
+    # the final style words: words of the first dictionary, each marking one cluster
     f = len(result.style_filters)
     assert 0 < f and np.sum(result.word_cluster >= 0) == f
     nb = patch_blocks(PARAMS.patch_size)      # comparable with localisation's patch descriptors
@@ -65,6 +65,7 @@ def test_unsupervised_finds_style_above_chance(collection, unsupervised):
     for stage in ("hog", "representatives", "encode", "fuse", "cluster", "reselect"):
         assert stage in stages and stage in result.timings
     assert stages.count("hog") == n and stages.count("encode") == n      # shape by shape
+    assert stages.count("representatives") == 2 * PARAMS.n_dictionaries  # one per vocabulary
     d = style_similarity(result)
     assert d.shape == (n, n) and np.allclose(d, d.T) and np.allclose(np.diag(d), 0, atol=1e-6)
 
