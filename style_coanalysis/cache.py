@@ -10,6 +10,8 @@ Beside it, in the same root, the same kind of store for what a second run would 
 (issue 15: a rerun on unchanged shapes should cost a small share of the first):
 - `HogCache` (`hog/`): a shape's HOG maps, keyed by a digest of its images (all HOG reads) and
   `hog_version()`, so however the drawings arrived, stale maps cannot be served.
+- `VocabularyCache` (`vocabulary/`): the default method's synthetic dictionaries, keyed by
+  `vocabulary.VOCABULARY_VERSION`, patch size, word count and seed (they read no shape).
 - `AnalysisCache` (`analysis/`): the whole `pipeline.AnalysisResult`, keyed by every shape's name
   and drawings in input order, the analysis parameters, labels, triplets and `analysis_version()`
   (which covers the package's source), so any change of input or code re-runs the analysis.
@@ -186,44 +188,41 @@ def hog_key(images_sum: str, version: str | None = None) -> str:
     return hashlib.sha256(payload.encode()).hexdigest()
 
 
-class HogCache(_NpzStore):
-    """Per-shape HOG maps (`features.hog_images`) in `<root>/hog/`, one entry per shape."""
+class _ArrayStore(_NpzStore):
+    """One float32 array (`FIELD`) per entry, in `<root>/<FOLDER>/` (root None: the user cache)."""
+
+    FOLDER = ""
+    FIELD = ""
 
     def __init__(self, root: str | os.PathLike | None = None):
-        super().__init__((Path(root) if root is not None else default_cache_dir()) / "hog")
+        super().__init__((Path(root) if root is not None else default_cache_dir()) / self.FOLDER)
 
     def load(self, key: str) -> np.ndarray | None:
         arrays = self.load_arrays(key)
-        if arrays is None or "maps" not in arrays or arrays["maps"].dtype != np.float32:
+        if arrays is None or self.FIELD not in arrays or arrays[self.FIELD].dtype != np.float32:
             if arrays is not None:
                 self.discard(key)
             return None
-        return arrays["maps"]
+        return arrays[self.FIELD]
 
-    def store(self, key: str, maps: np.ndarray) -> Path:
-        return self.store_arrays(key, {"maps": np.ascontiguousarray(maps, np.float32)})
+    def store(self, key: str, array: np.ndarray) -> Path:
+        return self.store_arrays(key, {self.FIELD: np.ascontiguousarray(array, np.float32)})
 
 
-class VocabularyCache(_NpzStore):
+class HogCache(_ArrayStore):
+    """Per-shape HOG maps (`features.hog_images`) in `<root>/hog/`, one entry per shape."""
+
+    FOLDER, FIELD = "hog", "maps"
+
+
+class VocabularyCache(_ArrayStore):
     """The default method's synthetic dictionaries (`vocabulary.words`) in `<root>/vocabulary/`."""
 
-    def __init__(self, root: str | os.PathLike | None = None):
-        super().__init__((Path(root) if root is not None else default_cache_dir()) / "vocabulary")
+    FOLDER, FIELD = "vocabulary", "words"
 
     @staticmethod
     def key(version: str, size: int, k: int, seed: int) -> str:
         return hashlib.sha256(f"{version}:{size}:{k}:{seed}".encode()).hexdigest()
-
-    def load(self, key: str) -> np.ndarray | None:
-        arrays = self.load_arrays(key)
-        if arrays is None or "words" not in arrays or arrays["words"].dtype != np.float32:
-            if arrays is not None:
-                self.discard(key)
-            return None
-        return arrays["words"]
-
-    def store(self, key: str, words: np.ndarray) -> Path:
-        return self.store_arrays(key, {"words": np.ascontiguousarray(words, np.float32)})
 
 
 # ---------------------------------------------------------------- the analysis
