@@ -11,7 +11,7 @@ Beside it, in the same root, the same kind of store for what a second run would 
 - `HogCache` (`hog/`): a shape's HOG maps, keyed by a digest of its images (all HOG reads) and
   `hog_version()`, so however the drawings arrived, stale maps cannot be served.
 - `VocabularyCache` (`vocabulary/`): the default method's synthetic dictionaries, keyed by
-  `vocabulary.VOCABULARY_VERSION`, patch size, word count and seed (they read no shape).
+  patch size, word count, seed and `vocabulary_version()` (they read no shape).
 - `AnalysisCache` (`analysis/`): the whole `pipeline.AnalysisResult`, keyed by every shape's name
   and drawings in input order, the analysis parameters, labels, triplets and `analysis_version()`
   (which covers the package's source), so any change of input or code re-runs the analysis.
@@ -33,9 +33,11 @@ from .meshes import Mesh
 
 # Bump when the renderers, seeding or visibility change what they produce for the same input.
 CODE_VERSION = "drawings-5"
-# Bump when HOG maps or the analysis change in a way the source digests below would not see.
+# Bump when HOG maps, the synthetic dictionaries or the analysis change in a way the source
+# digests below would not see.
 HOG_VERSION = "hog-1"
 ANALYSIS_VERSION = "analysis-1"
+VOCABULARY_VERSION = "vocabulary-2"
 
 
 def default_cache_dir() -> Path:
@@ -215,14 +217,28 @@ class HogCache(_ArrayStore):
     FOLDER, FIELD = "hog", "maps"
 
 
+@functools.lru_cache(maxsize=None)
+def vocabulary_version() -> str:
+    """VOCABULARY_VERSION, the packages and the sources a synthetic dictionary is made by
+    (vocabulary.py draws the canvases, features.py their HOG maps, encoding.py the k-means): an
+    edit to any of them never meets dictionaries made before it."""
+    here = Path(__file__).resolve().parent
+    versions = _package_versions("numpy", "scikit-image", "scikit-learn")
+    sources = [here / "vocabulary.py", here / "features.py", here / "encoding.py"]
+    return f"{VOCABULARY_VERSION}+{json.dumps(versions, sort_keys=True)}+" \
+        f"{_source_digest(sources)}"
+
+
 class VocabularyCache(_ArrayStore):
     """The default method's synthetic dictionaries (`vocabulary.words`) in `<root>/vocabulary/`."""
 
     FOLDER, FIELD = "vocabulary", "words"
 
     @staticmethod
-    def key(version: str, size: int, k: int, seed: int) -> str:
-        return hashlib.sha256(f"{version}:{size}:{k}:{seed}".encode()).hexdigest()
+    def key(size: int, k: int, seed: int, version: str | None = None) -> str:
+        """Key of the dictionary of `k` words of `size` px drawn with `seed`."""
+        payload = f"{version or vocabulary_version()}:{size}:{k}:{seed}"
+        return hashlib.sha256(payload.encode()).hexdigest()
 
 
 # ---------------------------------------------------------------- the analysis

@@ -37,8 +37,6 @@ from .features import hog_images, patch_descriptors
 CANVAS = 200                  # px, as the drawings
 DESCRIPTORS = 20000           # patches a dictionary is drawn from
 PATCHES_PER_CANVAS = 60       # inked pixels a canvas offers at most
-# Bump when the canvases, the draw or the k-means change what a dictionary holds.
-VOCABULARY_VERSION = "vocabulary-2"
 
 
 def _put(img: np.ndarray, rr, cc) -> None:
@@ -198,7 +196,7 @@ def words(size: int, k: int, seed: int, cache_dir=None) -> np.ndarray:
     `cache_dir`: None the user cache, False none)."""
     from .cache import VocabularyCache
     store = VocabularyCache(cache_dir) if cache_dir is not False else None
-    key = VocabularyCache.key(VOCABULARY_VERSION, size, k, seed)
+    key = VocabularyCache.key(size, k, seed)
     found = store.load(key) if store is not None else None
     if found is not None:
         return found

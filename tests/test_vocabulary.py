@@ -3,7 +3,7 @@ import numpy as np
 import pytest
 from conftest import DAMAGES, damage_entry
 
-from style_coanalysis import vocabulary
+from style_coanalysis import cache, vocabulary
 from style_coanalysis.cache import VocabularyCache
 from style_coanalysis.features import patch_blocks
 
@@ -39,10 +39,9 @@ def test_a_damaged_vocabulary_file_is_computed_again(tmp_path, how):
     other = vocabulary.words(16, 9, 6, tmp_path)
     assert len(other) == 9
     store = VocabularyCache(tmp_path)
-    path = store.path(VocabularyCache.key(vocabulary.VOCABULARY_VERSION, 16, 10, 6))
-    damage_entry(path, how, "words",
-                 store.path(VocabularyCache.key(vocabulary.VOCABULARY_VERSION, 16, 9, 6)))
-    assert store.load(VocabularyCache.key(vocabulary.VOCABULARY_VERSION, 16, 10, 6)) is None
+    path = store.path(VocabularyCache.key(16, 10, 6))
+    damage_entry(path, how, "words", store.path(VocabularyCache.key(16, 9, 6)))
+    assert store.load(VocabularyCache.key(16, 10, 6)) is None
     vocabulary.words.cache_clear()
     np.testing.assert_array_equal(vocabulary.words(16, 10, 6, tmp_path), w)
 
@@ -52,3 +51,16 @@ def test_no_cache_writes_nothing(tmp_path, monkeypatch):
     vocabulary.words.cache_clear()
     vocabulary.words(16, 8, 7, False)
     assert not any(tmp_path.rglob("*"))
+
+
+def test_a_dictionary_made_by_other_code_is_not_served(tmp_path, monkeypatch):
+    # an edit to the canvases, the HOG maps or the k-means changes the key: made anew, not read
+    w = vocabulary.words(16, 10, 7, tmp_path)
+    vocabulary.words.cache_clear()
+    monkeypatch.setattr(cache, "vocabulary_version", lambda: "edited")
+    made = []
+    compute = vocabulary.compute_words
+    monkeypatch.setattr(vocabulary, "compute_words", lambda *a: made.append(a) or compute(*a))
+    np.testing.assert_array_equal(vocabulary.words(16, 10, 7, tmp_path), w)
+    assert made == [(16, 10, 7)]
+    vocabulary.words.cache_clear()
