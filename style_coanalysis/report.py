@@ -5,11 +5,11 @@ confusion table against the given labels (and the ground truth when the input ca
 per cluster a strip of its most typical shapes, a gallery of its style patches (each word shown
 by the window of the drawings most like it, with its shape and view) and every member's best
 view with the matched style patches boxed beside a shaded view of its style regions, and last
-the shapes the analysis is least sure of. Images are PNG files beside the page (images/): it needs no server and no
-network. Everything is drawn with PIL, which the extension already bundles (scikit-image needs
-it), so the same report comes out of the panel inside Blender, where matplotlib is not there.
-The shaded view is a painter's-algorithm fill of the projected triangles: enough for a
-200-pixel thumbnail, and it needs no render engine.
+the shapes the analysis is least sure of. Images are PNG files beside the page (images/): it
+needs no server and no network. Everything is drawn with PIL, which the extension already
+bundles (scikit-image needs it), so the same report comes out of the panel inside Blender, where
+matplotlib is not there. The shaded view is a painter's-algorithm fill of the projected
+triangles: enough for a 200-pixel thumbnail, and it needs no render engine.
 """
 from __future__ import annotations
 

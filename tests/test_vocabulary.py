@@ -56,6 +56,7 @@ def test_no_cache_writes_nothing(tmp_path, monkeypatch):
 def test_a_dictionary_made_by_other_code_is_not_served(tmp_path, monkeypatch):
     # an edit to the canvases, the HOG maps or the k-means changes the key: made anew, not read
     w = vocabulary.words(16, 10, 7, tmp_path)
+    assert VocabularyCache(tmp_path).load(VocabularyCache.key(16, 10, 7)) is not None  # kept
     vocabulary.words.cache_clear()
     monkeypatch.setattr(cache, "vocabulary_version", lambda: "edited")
     made = []
