@@ -5,6 +5,7 @@ The root is imported under another package name, as Blender does when it install
 is tests/test_extension.py.
 """
 import importlib.util
+import os
 import sys
 from pathlib import Path
 
@@ -24,6 +25,20 @@ def load_extension():
         sys.modules[PKG] = module
         spec.loader.exec_module(module)
     return sys.modules[PKG]
+
+
+@pytest.fixture(scope="session", autouse=True)
+def user_cache(tmp_path_factory):
+    """The session's own user cache (XDG_CACHE_HOME, inherited by the commands the tests start),
+    so the suite never reads or writes the machine's: a test's result cannot come from an entry
+    an earlier version left there."""
+    before = os.environ.get("XDG_CACHE_HOME")
+    os.environ["XDG_CACHE_HOME"] = str(tmp_path_factory.mktemp("user_cache"))
+    yield Path(os.environ["XDG_CACHE_HOME"])
+    if before is None:
+        del os.environ["XDG_CACHE_HOME"]
+    else:
+        os.environ["XDG_CACHE_HOME"] = before
 
 
 @pytest.fixture(scope="module")
