@@ -474,6 +474,15 @@ def dictionary_state(random_state: int, member: int) -> int:
     return int(uniform(int(random_state) & 0xFFFFFFFF, member) * 2 ** 31)
 
 
+def vocabulary_specs(params: AnalysisParams) -> list[tuple[int, int, int]]:
+    """(patch size, words, seed) of each synthetic vocabulary `encode` reads, in order: each
+    dictionary's style words, then its layout words."""
+    return [spec for m in range(params.n_dictionaries)
+            for rs in (dictionary_state(params.random_state, m),)
+            for spec in ((params.dictionary_patch_size(m), params.n_words, rs),
+                         (params.structure_patch_size, params.n_representatives, rs + 1))]
+
+
 def encode(drawings, params: AnalysisParams, maps=None, progress=None,
            cache_dir=None) -> Encoding:
     """HOG maps -> word, layout and line profiles of every shape.
@@ -492,14 +501,12 @@ def encode(drawings, params: AnalysisParams, maps=None, progress=None,
     n = len(drawings)
     if params.n_dictionaries < 1:
         raise InputError(f"need at least one dictionary, got n_dictionaries={params.n_dictionaries}")
-    states = [dictionary_state(params.random_state, m) for m in range(params.n_dictionaries)]
     sizes = [params.dictionary_patch_size(m) for m in range(params.n_dictionaries)]
     t = time.perf_counter()
-    # style and layout words of each dictionary; some seconds each the first time, then read
-    # from the cache: one step each, so a first run shows progress and can be cancelled here
-    specs = [spec for size, rs in zip(sizes, states)
-             for spec in ((size, params.n_words, rs),
-                          (params.structure_patch_size, params.n_representatives, rs + 1))]
+    # style and layout words of each dictionary: the default seed's shipped with the package,
+    # others some seconds each the first time, then read from the cache: one step each, so a
+    # first run shows progress and can be cancelled here
+    specs = vocabulary_specs(params)
     made = []
     for j, spec in enumerate(specs):
         prog.step("representatives", j, len(specs))

@@ -21,12 +21,16 @@ carvings (collection2 k given 0.689 -> 0.594; with them 0.672, docs/generalisati
 A dictionary is `k` representatives (k-means; each centre replaced by its nearest drawn patch)
 of 20,000 patch descriptors cut at inked pixels, cut from the canvases' HOG maps exactly as the
 collection's windows are (`features.patch_descriptors`), so a word and a window are the same
-kind of numbers. Each dictionary is a pure function of (patch size, k, seed): computed
-once (some seconds) and kept in the user cache (`words`).
+kind of numbers. Each dictionary is a pure function of (patch size, k, seed). The default
+analysis seed's ten ship with the package (`SHIPPED`, made by `tools/make_vocabularies.py`; the
+suite checks they are what `compute_words` makes), so no run computes them and every machine
+reads the same words; another seed's are computed once (some seconds each) and kept in the
+cache (`words`).
 """
 from __future__ import annotations
 
 import functools
+from pathlib import Path
 
 import numpy as np
 from skimage.draw import bezier_curve, ellipse_perimeter, line, polygon_perimeter
@@ -37,6 +41,7 @@ from .features import hog_images, patch_descriptors
 CANVAS = 200                  # px, as the drawings
 DESCRIPTORS = 20000           # patches a dictionary is drawn from
 PATCHES_PER_CANVAS = 60       # inked pixels a canvas offers at most
+SHIPPED = Path(__file__).with_name("vocabularies.npz")    # the default seed's, `shipped_name`
 
 
 def _put(img: np.ndarray, rr, cc) -> None:
@@ -190,10 +195,27 @@ def compute_words(size: int, k: int, seed: int) -> np.ndarray:
     return unit_rows(desc[pick]).reshape(desc[pick].shape).astype(np.float32)
 
 
+def shipped_name(size: int, k: int, seed: int) -> str:
+    """The array name of a dictionary in `SHIPPED`."""
+    return f"{size}_{k}_{seed}"
+
+
+@functools.lru_cache(maxsize=1)
+def _shipped() -> dict:
+    with np.load(SHIPPED) as z:
+        arrays = {name: z[name] for name in z.files}
+    for a in arrays.values():
+        a.flags.writeable = False          # shared by every analysis of the process
+    return arrays
+
+
 @functools.lru_cache(maxsize=64)
 def words(size: int, k: int, seed: int, cache_dir=None) -> np.ndarray:
-    """`compute_words`, kept in this process and on disk (`cache.VocabularyCache` under
-    `cache_dir`: None the user cache, False none)."""
+    """`compute_words`: the package's `SHIPPED` copy when it has one, else kept in this process
+    and on disk (`cache.VocabularyCache` under `cache_dir`: None the user cache, False none)."""
+    shipped = _shipped().get(shipped_name(size, k, seed))
+    if shipped is not None:
+        return shipped
     from .cache import VocabularyCache
     store = VocabularyCache(cache_dir) if cache_dir is not False else None
     key = VocabularyCache.key(size, k, seed)

@@ -33,6 +33,7 @@ def test_zip_ships_the_extension_and_its_wheels_but_no_numpy_or_tests(linux_zip)
     names = zipfile.ZipFile(linux_zip).namelist()
     assert "blender_manifest.toml" in names and "__init__.py" in names
     assert any(n.startswith("style_coanalysis/") for n in names)
+    assert "style_coanalysis/vocabularies.npz" in names         # the default's words, not made
     wheels = [n for n in names if n.startswith("wheels/")]
     for pkg in ("scipy", "scikit_learn", "scikit_image"):
         assert any(n.split("/")[1].startswith(pkg) for n in wheels), pkg

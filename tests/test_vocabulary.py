@@ -65,3 +65,22 @@ def test_a_dictionary_made_by_other_code_is_not_served(tmp_path, monkeypatch):
     np.testing.assert_array_equal(vocabulary.words(16, 10, 7, tmp_path), w)
     assert made == [(16, 10, 7)]
     vocabulary.words.cache_clear()
+
+
+def test_the_shipped_words_are_what_the_code_makes_for_the_default_seed(monkeypatch):
+    # the default analysis reads every one of them, and each is what computing it gives: a change
+    # to the canvases, HOG maps, k-means or defaults fails here until tools/make_vocabularies.py
+    from style_coanalysis.params import AnalysisParams
+    from style_coanalysis.pipeline import vocabulary_specs
+    specs = vocabulary_specs(AnalysisParams())
+    shipped = vocabulary._shipped()
+    assert sorted(shipped) == sorted(vocabulary.shipped_name(*s) for s in specs)
+    for spec in specs:
+        np.testing.assert_array_equal(shipped[vocabulary.shipped_name(*spec)],
+                                      vocabulary.compute_words(*spec))
+    # and a run reads them without computing or caching anything
+    vocabulary.words.cache_clear()
+    monkeypatch.setattr(vocabulary, "compute_words", lambda *a: pytest.fail("computed"))
+    for spec in specs:
+        assert vocabulary.words(*spec, False) is shipped[vocabulary.shipped_name(*spec)]
+    vocabulary.words.cache_clear()
