@@ -10,8 +10,9 @@ Beside it, in the same root, the same kind of store for what a second run would 
 (issue 15: a rerun on unchanged shapes should cost a small share of the first):
 - `HogCache` (`hog/`): a shape's HOG maps, keyed by a digest of its images (all HOG reads) and
   `hog_version()`, so however the drawings arrived, stale maps cannot be served.
-- `VocabularyCache` (`vocabulary/`): the default method's synthetic dictionaries, keyed by
-  patch size, word count, seed and `vocabulary_version()` (they read no shape).
+- `VocabularyCache` (`vocabulary/`): the default method's synthetic dictionaries of a seed
+  other than the default's (those ship in the package, `vocabulary.SHIPPED`), keyed by patch
+  size, word count, seed and `vocabulary_version()` (they read no shape).
 - `AnalysisCache` (`analysis/`): the whole `pipeline.AnalysisResult`, keyed by every shape's name
   and drawings in input order, the analysis parameters, labels, triplets and `analysis_version()`
   (which covers the package's source), so any change of input or code re-runs the analysis.
@@ -230,7 +231,8 @@ def vocabulary_version() -> str:
 
 
 class VocabularyCache(_ArrayStore):
-    """The default method's synthetic dictionaries (`vocabulary.words`) in `<root>/vocabulary/`."""
+    """The synthetic dictionaries `vocabulary.words` computes (a seed whose dictionaries the
+    package does not ship) in `<root>/vocabulary/`."""
 
     FOLDER, FIELD = "vocabulary", "words"
 
