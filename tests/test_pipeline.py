@@ -394,6 +394,31 @@ def test_labels_the_unsupervised_cut_honours_change_only_its_names():
     assert not np.array_equal(seeded, styles[own])  # the seeded cut alone moves some shapes
 
 
+@pytest.mark.parametrize("picked, margin, reading", [
+    ([55, 10, 37, 40, 36, 19, 33, 83], 1, "own"),
+    ([31, 6, 69, 75, 88, 47, 82, 44], 2, "seeded")])
+def test_few_labels_move_the_cut_only_when_it_misplaces_two_more(picked, margin, reading):
+    """Two labels per style where the graph's own cut misplaces some: the seeded cut replaces
+    it only if it places at least two more labelled shapes in their style (one more is noise);
+    either way the labelled shapes keep their labels."""
+    from style_coanalysis import graph
+    from style_coanalysis.pipeline import (_label_transduction, _named_cut, _seeded_cut,
+                                           _unit_coordinates)
+    rng = np.random.default_rng(1)
+    x = rng.uniform(0, 1, (90, 2))                  # no clear groups: many cuts nearly as good
+    a = graph.affinity(x)
+    y = np.full(90, -1)
+    y[picked] = [0, 0, 1, 1, 2, 2, 3, 3]
+    cuts = {"own": _named_cut(a, y, 4, 0), "seeded": _seeded_cut(_unit_coordinates(a, 4), y, 4)}
+    placed = {k: int((c[picked] == y[picked]).sum()) for k, c in cuts.items()}
+    assert placed["seeded"] - placed["own"] == margin     # the case this parameter stands for
+    classes, _, used = _label_transduction(a, x, y, 4, 0)
+    assert used == reading
+    expected = cuts[reading].copy()
+    expected[picked] = y[picked]
+    assert classes.tolist() == expected.tolist()
+
+
 def test_labels_place_the_centres_and_name_the_clusters_whatever_the_order():
     """Two labels per style in three separated groups: every shape gets its group's style (the
     names come from the labels, not from the cluster numbers), and a reordered input gives the
