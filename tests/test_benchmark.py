@@ -277,28 +277,32 @@ def test_the_goal_report_counts_what_the_issue_asks():
     res = {"collections": {
         "two": coll(2, {"k": {"default": row(0.92, 0.6), "paper": row(0.95, 0.7)},
                         "labels-2": {"default": row(0.96, 0.7)},
+                        "labels-10%": {"default": row(0.9, 0.5)},
                         "auto": {"default": row(0.9, 0.5, (2, 3, 5)),
                                  "paper": row(0.95, 0.2, (9, 9, 9))}},
                     stability={"modes": ["k"], "variants": {"obj": {}}, "min_k": 0.93,
                                "commit": "abc"}),
         "four": coll(4, {"k": {"default": row(0.7, 0.3)}, "labels-2": {"default": row(0.6, 0.2)},
+                         "labels-20%": {"default": row(0.75, 0.4)},
                          "auto": {"default": row(0.45, 0.2, (4, 2, 4))}}, line=0.8,
                      stability={"modes": ["k", "auto"], "variants": {"obj": {}, "blend": {}},
                                 "min_k": 0.97, "min_auto": 1.0})}}
     lines = B.goal_report(res).splitlines()
     assert lines[0].startswith("Rows below the paper or a trivial baseline (mean style purity): "
-                               "5 of 6")
+                               "6 of 8")
     assert "four k (line statistics)" in lines[0] and "two auto (paper)" in lines[0]
     # the paper's 9 clusters raise its purity, not its ARI
     assert lines[1] == "  of those, below by ARI too: 1: two k"
     assert lines[2] == "2 labels per style at or above k given: 1 of 2; below: four 0.600 vs 0.700"
-    assert lines[3] == ("Automatic k right: 3 of 6 runs; at most N/4 clusters: 6 of 6; two-style "
+    assert lines[3] == ("10% and 20% labels at or above k given: 1 of 2; below: two labels-10% "
+                        "0.900 vs 0.920")
+    assert lines[4] == ("Automatic k right: 3 of 6 runs; at most N/4 clusters: 6 of 6; two-style "
                         "collections given 2 or 3 clusters: 2 of 3")
-    assert lines[4] == "Stability two (obj; abc): below 0.95 in k 0.93"
-    assert lines[5] == ("Stability four (blend, obj; this run): at or above 0.95 in every mode "
+    assert lines[5] == "Stability two (obj; abc): below 0.95 in k 0.93"
+    assert lines[6] == ("Stability four (blend, obj; this run): at or above 0.95 in every mode "
                         "measured")
-    assert lines[6] == "Stability >= 0.95 on every route and mode measured: 1 of 2 collections"
-    assert lines[7].endswith("met here on: two")
+    assert lines[7] == "Stability >= 0.95 on every route and mode measured: 1 of 2 collections"
+    assert lines[8].endswith("met here on: two")
 
 
 def test_the_turned_variant_turns_every_shape_a_quarter_about_its_up_axis(tmp_path):
