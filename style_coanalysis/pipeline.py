@@ -249,9 +249,11 @@ def _label_transduction(a: np.ndarray, features: np.ndarray, y: np.ndarray, n_cl
     centres, and one label it misplaces is not enough evidence: with one label a style the
     seeded cut starts from single shapes, and placing one label more was noise (a throwaway
     screen on the benchmark's encodings, 34 collections, seeds 0-2, against a margin of one:
-    label rows below k given by more than 0.005, 12 -> 6, sample-24 10% labels 0.69 -> 0.81, sample-cats-1 0.85 ->
-    0.90; sample-styles-4 2 labels 0.87 -> 0.81; sums 2 labels 26.80 -> 26.72, 10% 26.27 ->
-    26.33, 20% 27.76 -> 27.76; a margin of three lost more on sample-styles-4, 0.66).
+    label rows below k given by more than 0.005, 12 -> 6, sample-24 10% labels 0.69 -> 0.81,
+    sample-cats-1 0.85 -> 0.90; sample-styles-4 2 labels 0.87 -> 0.81; sums 2 labels 26.80 ->
+    26.72, 10% 26.27 -> 26.33, 20% 27.76 -> 27.76; a margin of three lost more on
+    sample-styles-4, 0.66; the benchmark on the same drawings, generalisation_s48lab against
+    _s48fresh: label rows below k given 13 -> 7, docs/generalisation.md).
     Measured before, against the seeded cut alone (generalisation benchmark, 17 collections, 3
     seeds; generalisation_s17lab): competing with the graph's own cut, 2 labels per style at or
     above the unsupervised result (k given) on 17 of 17 collections (12 before), sum of mean
