@@ -2,7 +2,8 @@
 
 Each command is implemented in the Blender adapter (`style_coanalysis.blender.cmd_<name>.run`),
 imported only when that command runs, so `--help` and the pure core work without `bpy`.
-Exit codes: 0 success, 2 bad input (message names the file or object), 1 internal error.
+Exit codes: 0 success, 2 bad input (message names the file or object), 1 internal error,
+130 interrupted (Ctrl-C).
 """
 from __future__ import annotations
 

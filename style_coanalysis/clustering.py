@@ -124,7 +124,9 @@ class SelfTuningSpectralClustering(ClusterMixin, BaseEstimator):
     (incrementally: the previous rotated set plus the next eigenvector, as in the authors' code)
     to align with the axes. The chosen C is the largest whose cost is within ``cost_tol`` of the
     best (the authors' rule: 0.001 in quality). Final labels: k-means on the row-normalised top-C
-    eigenvectors (Ng-Jordan-Weiss), seeded by the rotation's argmax assignment.
+    eigenvectors (Ng-Jordan-Weiss); with C chosen, one run seeded by the rotation's argmax
+    assignment and one of 10 random starts, the lower inertia kept (with n_clusters given, the
+    10 random starts only).
     """
 
     def __init__(self, n_clusters=None, k_neighbors=7, max_clusters=10, min_clusters=2,
@@ -347,10 +349,12 @@ class TripletClustering(ClusterMixin, BaseEstimator):
     2. * Must-links are closed transitively (connected components) and cannot-links lifted to
        whole components: with 300 label-derived triplets on 120 shapes the closure turns 300
        must-links into ~1,700 implied pairs (measured on the sample collection).
-    3. * A is the cosine similarity of the fused features in a metric learned from the
-       constraints (:func:`pair_metric`, coordinates that differ as much inside must-linked
-       pairs as across cannot-linked ones are switched off). The paper's A = V^T V is the
-       special case with unit weights (``metric=False``).
+    3. * A is the constrained spectral graph of step 5 (``similarity="graph"``, the default:
+       the normalised graph with must-linked pairs at its strongest tie and cannot-linked ones
+       at 0), or with ``similarity="cosine"`` (the paper method's) the cosine similarity of the
+       features, in a metric learned from the constraints when ``metric`` (:func:`pair_metric`,
+       coordinates that differ as much inside must-linked pairs as across cannot-linked ones
+       are switched off); the paper's A = V^T V is cosine with ``metric=False``.
     4. A' = A + N_m - N_c with the closed constraint indicators (eq. 3).
     5. * Y is initialised from a constrained spectral embedding (Kamvar et al. 2003: an
        affinity graph with must-linked pairs set to its strongest tie and cannot-linked ones to
@@ -359,9 +363,10 @@ class TripletClustering(ClusterMixin, BaseEstimator):
        (``fit(..., affinity=)``; the analysis passes its style graph) or else a local-scaling
        graph of the weighted features' `k_neighbors` nearest.
     6. A' ~ Y S Y^T by semi-NMF multiplicative updates (S free in sign, A' has negative entries).
-    7. * Labels: the memberships Y summed over each must-link component, one cluster per
-       component, cannot-linked components kept apart greedily, and exactly C non-empty
-       clusters (a previous version could return fewer clusters than asked).
+    7. * Labels: the memberships Y plus the spectral start's assignment, summed over each
+       must-link component, one cluster per component, cannot-linked components kept apart
+       greedily, and exactly C non-empty clusters (a previous version could return fewer
+       clusters than asked).
     ``membership_`` is Y with rows summing to one.
     """
 

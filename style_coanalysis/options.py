@@ -71,8 +71,8 @@ class JobOptions:
     cancel: object = None               # optional callable -> bool, polled at every step
 
     def drawing_settings(self) -> DrawingSettings:
-        # localisation uses three times as many seeds; seeds come in farthest-point order, so the
-        # first n_seeds of them are themselves an evenly spread set for the analysis
+        # seed_multiplier times n_seeds seeds are drawn; seeds come in farthest-point order, so
+        # the first n_seeds of them are themselves an evenly spread set for the analysis
         return DrawingSettings(renderer=self.renderer, up=self.up,
                                suggestive_contours=self.suggestive_contours,
                                n_seeds=self.n_seeds * self.localisation.seed_multiplier,

@@ -1,7 +1,10 @@
-"""Every tunable number of the method in one place, with the paper's defaults.
+"""The settings a person may change, with the paper's defaults.
 
-Two groups: what changes the drawings (and so the per-shape cache key) and what changes only
-the global analysis. Both are frozen dataclasses so they hash and print cleanly into reports.
+Three groups: what changes the drawings (and so the per-shape cache key), what changes only
+the global analysis, and the style regions' back-projection. All are frozen dataclasses so they
+hash and print cleanly into reports. Numbers of the default method's design that are not
+settings live beside the code they shape (e.g. `graph.EDGE_LADDER`, `views.LADDER_RUNGS`,
+`pipeline.SEEDED_MARGIN`), and the regions' own settings in `regions.RegionParams`.
 """
 from __future__ import annotations
 
@@ -12,7 +15,7 @@ from dataclasses import asdict, dataclass
 class DrawingSettings:
     """How each shape is turned into line drawings, seeds and visibility (paper section 3, 4.1)."""
 
-    renderer: str = "freestyle"          # "freestyle" (faithful) or "lineart" (fast)
+    renderer: str = "freestyle"          # "freestyle" (faithful), "lineart" or "zbuffer" (fast)
     up: str = "z"                        # "z" or "y": the asset's up axis
     n_views: int = 12                    # cameras every 360/n_views degrees of azimuth
     elevation_deg: float = 30.0          # cameras look down at the centroid from this angle
@@ -65,7 +68,9 @@ class AnalysisParams:
 class LocalisationParams:
     """Back-projection of style patches to the surface (paper 4.5 and 5.3)."""
 
-    seed_multiplier: int = 3             # three times as many seeds, as in the decimation application
+    seed_multiplier: int = 3             # seeds drawn per shape: n_seeds times this (the contact
+                                         # sheet shows them all; the paper method reads the first
+                                         # n_seeds; the regions match every window, no seed)
     match_threshold: float = 0.6         # HOG similarity a window must reach to count as a style match
     words_per_cluster: int = 10          # the most discriminative style words of a cluster marked
     # (on the sample: 3 words give area precision 0.69 / recall 0.15, 10 give 0.46 / 0.45, all

@@ -44,9 +44,11 @@ stable) but each stage is made to hold on collections it was not tuned on:
   3 collections x 3 seeds x 2 modes, 0.92 -> 0.97 on average). The loop stops when neither
   clusters nor words change, on a repeated state, or after `params.max_rounds`.
 Every order-dependent step runs in a canonical order, so the file order does not change the
-result. Nothing here reads ground truth. Nothing holds every shape's HOG maps or an N x N array:
-`encode` reads the shapes one at a time, the look-alike means are taken in row blocks, and the
-graphs are sparse (graph.py), so memory grows linearly with the collection.
+result. Nothing here reads ground truth. Nothing holds every shape's HOG maps or an N x N array
+but the triplet mode: `encode` reads the shapes one at a time, the look-alike means are taken in
+row blocks, and the graphs are sparse (graph.py), so memory grows linearly with the collection;
+the triplet clustering (`clustering.TripletClustering`, eq. 3) factorises a dense N x N
+similarity.
 """
 from __future__ import annotations
 

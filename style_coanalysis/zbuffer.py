@@ -1,7 +1,7 @@
 """The fast drawing path: feature lines and visibility from one depth buffer per view, in numpy.
 
 Why: Freestyle spends seconds a shape finding which edges are visible, and the other renderers
-test each seed with a BVH query per camera. Here each view is rasterised once into a depth
+test a seed with a BVH query per camera (until one sees it). Here each view is rasterised once into a depth
 buffer holding, per pixel, the nearest surface's depth and triangle; every visibility question
 of that view (line samples, seeds) is then a vectorised lookup in it. No render engine, no Blender: the same function runs anywhere.
 

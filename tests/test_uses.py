@@ -147,7 +147,7 @@ def test_buttons_on_the_saved_result(result, ext, tmp_path):
     with pytest.raises(RuntimeError, match="'New' was not in the last style analysis"):
         bpy.ops.style.select_similar()
 
-    # the space survives save and reload; Clear Results switches both buttons off
+    # the space survives save and reload; Clear Style Results switches both buttons off
     path = str(tmp_path / "saved.blend")
     bpy.ops.wm.save_as_mainfile(filepath=path)
     bpy.ops.wm.open_mainfile(filepath=path)
@@ -344,6 +344,6 @@ def test_identify_button(base, ext, tmp_path):
         assert set(keys) == set(before[0][name][1]) | added[1]
     from style_coanalysis_ext.operators.uses import IDENTIFIED_KEY, read_list
     assert sorted(r[0] for r in read_list(scene, IDENTIFIED_KEY)) == sorted(o.name for o in meshes)
-    # Clear Results takes the identification away too, and leaves the scene as before it
+    # Clear Style Results takes the identification away too, and leaves the scene as before it
     assert bpy.ops.style.clear_results() == {"FINISHED"}
     assert state() == before and IDENTIFIED_KEY not in scene
