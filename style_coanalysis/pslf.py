@@ -28,10 +28,10 @@ Choices that differ from a literal reading of the paper, and why:
   label term is made an average over labelled shapes: beta' = beta * n / n_labelled. For a
   view-specific coordinate (data curvature pi_p ~ 1/P) the default beta = 0.05 then pulls a
   labelled shape about halfway to its class basis: labels shape the factors rather than decorate
-  them. gamma is expressed as the percentage by which an average-strength row of W is shrunk
-  (gamma' = gamma/100 * 2 beta' n_labelled/sqrt(C) * rms(V)), so gamma = 10 trims rows of W that
-  are weaker than about a tenth of the average, whatever the data scale.
-* gamma calibration (changed): gamma' = gamma/1000 * ... (was /100). With /100, gamma = 10 at
+  them. gamma is expressed in thousandths by which an average-strength row of W is shrunk
+  (gamma' = gamma/1000 * 2 beta' n_labelled/sqrt(C) * rms(V)), so gamma = 10 trims rows of W that
+  are weaker than about a hundredth of the average, whatever the data scale.
+* gamma calibration (changed): thousandths, not hundredths (/100). With /100, gamma = 10 at
   beta >= 0.03 shrank W towards zero and dragged the labelled factors with it: prediction accuracy
   on the sample collection (20 % labels, 3 seeds) fell to chance, 0.28-0.31; with gamma = 0 it was
   0.57 and with the new scale gamma = 10 gives the same as the old gamma = 1 (0.56).
