@@ -67,3 +67,10 @@ def test_bad_binvox_names_file(tmp_path):
     p.write_bytes(b"#binvox 1\ndim 2 2 2\ndata\n\x01\x05")
     with pytest.raises(InputError, match="junk.binvox"):
         voxels.voxel_mesh(p)
+
+
+def test_the_default_root_is_found_from_any_working_folder(tmp_path, monkeypatch):
+    # the relative default is tried from the working folder, then from the repository root
+    here = os.path.realpath(ROOT)
+    monkeypatch.chdir(tmp_path)
+    assert os.path.realpath(voxels.resolve_root()) == here

@@ -127,7 +127,7 @@ def resolve_root(root=DEFAULT_ROOT) -> str:
     root = os.fspath(root)
     if os.path.isabs(root) or os.path.isdir(root):
         return root
-    repo = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+    repo = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
     return os.path.join(repo, root)
 
 
