@@ -39,7 +39,7 @@ def report(label, feats, shapes, seeds):
 def main():
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--size", type=int, default=120)
-    ap.add_argument("--seeds", type=int, default=5, help="k-means seeds (and sample seeds)")
+    ap.add_argument("--seeds", type=int, default=5, help="k-means seeds (the sample's seeds are 0-2)")
     ap.add_argument("--no-voxels", action="store_true")
     ap.add_argument("--lines", type=int, default=0,
                     help="render N sample shapes with Line Art and score the line-statistics baseline")

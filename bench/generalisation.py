@@ -62,7 +62,7 @@ def main(argv=None) -> int:
                          f"{', '.join(B.QUICK_MODES)}; render-based stability on sample-120 only".replace("%", "%%"))
     ap.add_argument("--no-stability", action="store_true", help="skip every stability check")
     ap.add_argument("--stability-everywhere", action="store_true",
-                    help="render-based stability (scaled, OBJ, .blend) on every collection, "
+                    help="render-based stability (scaled, OBJ, .blend, turned) on every collection, "
                          f"not only {', '.join(B.RENDER_STABILITY_DEFAULT)}")
     ap.add_argument("--stability-seeds", type=int, default=1,
                     help="stability over the first N seeds (each variant: one analysis per mode "

@@ -96,7 +96,7 @@ def _jobs(context) -> int:
 
 
 def build_job(context):
-    """(meshes, options, warnings) for the current settings. Raises InputError naming the problem
+    """(meshes, options, warnings, job module) for the current settings. Raises InputError naming the problem
     when fewer than two shapes can be analysed. Reads the scene, changes nothing."""
     from ..style_coanalysis.blender import job, scene as bscene  # heavy: only when running
 

@@ -2,8 +2,9 @@
 
 Checks every argument and the output folder (`options`), loads the shapes (a .blend, or a folder
 of mesh files) and the constraint files, runs the job with progress on stderr, writes the results
-onto the objects and saves DIR/result.blend, DIR/report.json and DIR/report.html into a
-temporary folder beside DIR that then replaces DIR whole (`options.publish`): DIR holds a complete
+onto the objects and saves DIR/result.blend, DIR/report.json, DIR/report.html and
+DIR/style_space.npz (what the `similar` and `suggest-labels` commands read) into a temporary
+folder beside DIR that then replaces DIR whole (`options.publish`): DIR holds a complete
 previous result or the complete new one, and never an input.
 """
 from __future__ import annotations

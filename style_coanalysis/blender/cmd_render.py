@@ -2,7 +2,9 @@
 
 Writes DIR/<shape>/view_00.png .. view_11.png (black ink on white) and DIR/<shape>/contact.png
 (all views in a grid, the seeds visible in each view drawn as red dots), so a person can check
-what the analysis will see. Shapes that cannot be drawn are listed on stderr and skipped.
+the drawings before an analysis. The seeds are this command's own draw (30 per shape, the
+paper's count; `analyze` draws 90, of which the paper method reads the first 30, and the
+default method reads none: it matches every window). Shapes that cannot be drawn are listed on stderr and skipped.
 """
 from __future__ import annotations
 

@@ -5,8 +5,11 @@ Stored in the file (so it survives save, reload and undo):
   constraints, the analysis settings and the last run's clusters.
 - `Object.style_coanalysis` (`StyleObjectSettings`): the label a person assigned to the object.
 
-The analysis results on objects (cluster, predicted label, confidence, best view) are plain custom
-properties written by `writeback.py`, so they are readable without the add-on installed.
+The analysis results on objects (cluster, predicted label, confidence, best view, and the
+identified style of Identify Style from Drawings) are plain custom properties, with the vertex
+groups and materials, written by `writeback.py`; the scene's custom properties hold the style
+space (`space_store.py`) and the last Select Similar, Suggest and Identify answers
+(`operators/uses.py`). They are readable without the add-on installed.
 
 Objects are referenced by PointerProperty (triplets) or by name (label assignment is on the object
 itself), never held in Python variables: undo frees `bpy_struct`s.
@@ -79,11 +82,15 @@ class StylePreferences(bpy.types.AddonPreferences):
 
     cache_dir: StringProperty(
         name="Cache Folder", subtype="DIR_PATH", default="",
-        description="Where line drawings are cached between runs (empty: the extension's user folder)")
+        description="Where drawings, HOG maps, analysis results, style regions and "
+                    "synthetic vocabularies are cached between runs (empty: the extension's "
+                    "user folder)")
     renderer: EnumProperty(name="Default Renderer", items=RENDERERS, default="freestyle",
                            description="Line renderer used when a scene asks for the default")
     jobs: IntProperty(name="Jobs", default=1, min=0, max=64,
-                      description="Parallel processes for per-shape rendering (0: all cores)")
+                      description="Parallel processes for per-shape work when Blender runs as a Python "
+                                  "module (bpy); inside the Blender application shapes are "
+                                  "drawn one at a time on its main thread (0: all cores)")
 
     def draw(self, context):
         col = self.layout.column()
@@ -209,7 +216,8 @@ class StyleSettings(bpy.types.PropertyGroup):
     decimate_strength: FloatProperty(name="Strength", min=0.0, max=1000.0, soft_max=10.0,
                                      default=1.0,
                                      description="How strongly style weights raise collapse cost "
-                                                 "(vertices of weight 1 are never collapsed)")
+                                                 "(with Protect Fully, vertices of weight 1 are "
+                                                 "never collapsed)")
     decimate_hard: BoolProperty(name="Protect Fully", default=True,
                                 description="Never collapse vertices of style weight 1 (the ratio "
                                             "may be out of reach); off: collapse them last")

@@ -22,8 +22,8 @@ n_seeds=90)`, the first 30 seeds kept for the analysis, through the user drawing
   * `hu2017-all` (all 537 voxel shapes) and `hu2017-60-0..4` (60 each, 15 per style spread over
     the 5 categories, subset seeds 0..4), and `hu2017-styles-2-0..5`: every pair of its four
     styles, 60 shapes (30 per style over the 5 categories), real two-style make-ups;
-  * `collection2`: `evaluation.collection2.generate(size=120, seed=0)` (skipped with a note
-    while that module does not exist), and its make-ups of 48 and 40 shapes;
+  * `collection2`: `evaluation.collection2.generate(size=120, seed=0)`, and its make-ups of 48
+    and 40 shapes;
   * `collection3-60` and `collection3-25`: `evaluation.collection3.generate(size=60, seed=0)`
     and a stratified 25 of it, two styles (curvy, straight-lined) over tables, chairs and
     benches, shaped like the real collection of issue 11 (written from a spec by a helper that
@@ -497,7 +497,8 @@ def evaluate(collections, modes: Sequence[str] = MODES, methods: Sequence[str] =
     cluster array); default `pipeline.analyse`. `stability`: ARI between partitions of the
     default method (in each of `stability_modes`) under 3 shuffled orders, and, for the
     collections named in `render_stability` (None: RENDER_STABILITY_DEFAULT, True: all), under
-    coordinates scaled by 1.0000001 and loaded from OBJ files and from a .blend (new renders);
+    coordinates scaled by 1.0000001, loaded from OBJ files and from a .blend, and every shape
+    turned a quarter about its up axis (new renders);
     over the first `stability_seeds` seeds (each variant costs one analysis per mode and
     seed).
     `on_collection(results_so_far)` is called after each collection (to save partial results).
