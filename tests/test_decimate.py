@@ -2,6 +2,8 @@
 count it must keep more of the style region than plain decimation, and it must report honestly
 what it reached."""
 
+import re
+
 import numpy as np
 import pytest
 
@@ -89,11 +91,17 @@ def test_needs_the_style_group(dec, grid):
         dec.add_decimate(grid, 0.3, 1.0)
 
 
-def test_operator_reports_counts(ext, grid):
+def test_operator_reports_counts(ext, grid, capfd):
     grid.select_set(True)
     bpy.context.view_layer.objects.active = grid
+    before = len(grid.data.polygons)
+    capfd.readouterr()
     assert bpy.ops.style.decimate(ratio=0.3, strength=1.0, style_preserving=True) == {"FINISHED"}
     styled = grid.modifiers[0].face_count
+    said = capfd.readouterr()
+    # the status line gives the count the modifier reached, of the mesh's, and the style regions'
+    assert re.search(rf"'Bumpy' style-preserving: {styled} of {before} triangles \(asked "
+                     rf"{round(0.3 * before)}\), style regions \d+ of \d+", said.out + said.err)
     assert bpy.ops.style.decimate(ratio=0.3, style_preserving=False, match_style=True) == \
         {"FINISHED"}
     assert [m.name for m in grid.modifiers] == ["Plain Decimate"]

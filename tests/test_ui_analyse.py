@@ -156,9 +156,12 @@ def test_failed_run_leaves_the_scene_as_it_was(scene, job, monkeypatch):
     assert all(len(o.vertex_groups) == 0 for o in scene.objects)
 
 
-def test_modifier_changing_vertex_count_is_skipped_by_name(scene, fake):
+def test_modifier_changing_vertex_count_is_skipped_by_name(scene, fake, capfd):
     bpy.data.objects["Table_b"].modifiers.new("Sub", "SUBSURF")
+    capfd.readouterr()
     assert bpy.ops.style.analyse() == {"FINISHED"}
+    said = capfd.readouterr()
+    assert "'Table_b' skipped: its modifiers change the vertex count" in said.out + said.err
     (meshes, _), = fake.calls
     assert "Table_b" not in [m.name for m in meshes]
     assert "style_cluster" not in bpy.data.objects["Table_b"]
