@@ -34,7 +34,6 @@ from pathlib import Path
 
 import numpy as np
 from skimage.draw import bezier_curve, ellipse_perimeter, line, polygon_perimeter
-from threadpoolctl import threadpool_limits
 
 from .encoding import representatives, unit_rows
 from .features import hog_images, patch_descriptors
@@ -190,18 +189,10 @@ def synthetic_descriptors(size: int, seed: int, n: int = DESCRIPTORS) -> np.ndar
 
 
 def compute_words(size: int, k: int, seed: int) -> np.ndarray:
-    """(k, nb, nb, 36) unit words: k-means representatives of `synthetic_descriptors`.
-
-    The k-means runs on one thread: scikit-learn's Lloyd steps sum each thread's share of the
-    rows and then the shares, so the float32 centres round with the number of threads, and
-    near-equal patches trade places. With two threads instead of one, 1 or 2 of the 10
-    dictionaries of analysis seeds 1, 2 and 3 came out otherwise (48 px, 50 words), and seed 3's
-    partitions with them (hu2017-styles-2-4, k given: ARI 0.27 between the two): the same
-    shapes and seed gave another result on a machine with other cores, or in another process
-    of the same run. The default seed's words, shipped, are the same either way."""
+    """(k, nb, nb, 36) unit words: k-means representatives of `synthetic_descriptors`, the
+    same on every machine (`representatives` runs on one thread)."""
     desc = synthetic_descriptors(size, seed & 0xFFFFFFFF)
-    with threadpool_limits(limits=1):
-        pick = representatives(desc, k, seed & 0x7FFFFFFF)
+    pick = representatives(desc, k, seed & 0x7FFFFFFF)
     return unit_rows(desc[pick]).reshape(desc[pick].shape).astype(np.float32)
 
 

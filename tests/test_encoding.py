@@ -81,6 +81,19 @@ def test_representatives_are_real_patches_one_per_centre():
     assert len(representatives(x[:3], 50)) == 3                # fewer patches than k
 
 
+def test_representatives_are_the_same_whatever_the_threads():
+    # scikit-learn's k-means sums per thread: with two threads rather than one, these patches
+    # (analysis seed 2's 48 px synthetic words) gave other representatives
+    from threadpoolctl import threadpool_limits
+    from style_coanalysis.vocabulary import synthetic_descriptors
+    desc = synthetic_descriptors(48, 2)
+    picked = []
+    for threads in (1, 2):
+        with threadpool_limits(limits=threads):
+            picked.append(representatives(desc, 50, 2))
+    np.testing.assert_array_equal(picked[0], picked[1])
+
+
 def test_encoding_is_5k_per_view_and_vectorised_over_shapes():
     rng = np.random.default_rng(4)
     n, v = 6, 2

@@ -84,13 +84,3 @@ def test_the_shipped_words_are_what_the_code_makes_for_the_default_seed(monkeypa
     for spec in specs:
         assert vocabulary.words(*spec, False) is shipped[vocabulary.shipped_name(*spec)]
     vocabulary.words.cache_clear()
-
-
-def test_the_words_are_the_same_whatever_the_threads():
-    # scikit-learn's k-means sums per thread; with two threads this dictionary came out otherwise
-    from threadpoolctl import threadpool_limits
-    made = []
-    for threads in (1, 2):
-        with threadpool_limits(limits=threads):
-            made.append(vocabulary.compute_words(48, 50, 2))
-    np.testing.assert_array_equal(made[0], made[1])
