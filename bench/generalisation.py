@@ -6,6 +6,7 @@ tuned on, beside trivial baselines and the paper's method, and is it stable?
     python bench/generalisation.py --collections sample hu2017-60 --modes k auto --methods default
     python bench/generalisation.py --table bench/results/generalisation.json   # reprint a table
     python bench/generalisation.py --table old.json new.json   # one table of several runs
+    python bench/generalisation.py @bench/results/table.args --goals   # the README's table
 
 Collections, modes and the scoring loop live in `style_coanalysis/evaluation/benchmark.py`
 (importable: `load_collection`, `evaluate`, `summary_table`). Writes
@@ -48,7 +49,8 @@ def code_state() -> dict:
 
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0],
-                                 formatter_class=argparse.RawDescriptionHelpFormatter)
+                                 formatter_class=argparse.RawDescriptionHelpFormatter,
+                                 fromfile_prefix_chars="@")
     ap.add_argument("--collections", nargs="+", default=None,
                     help="names or prefixes (default: all): " + ", ".join(B.collection_specs()))
     ap.add_argument("--modes", nargs="+", default=None, choices=B.MODES, metavar="MODE",
@@ -80,7 +82,9 @@ def main(argv=None) -> int:
     ap.add_argument("--table", metavar="JSON", nargs="+", default=None,
                     help="only print the Markdown table of saved results (e.g. partial runs); "
                          "with several files, a method's figures in a later file replace the "
-                         "same collection and mode of an earlier one measured on no more seeds")
+                         "same collection and mode of an earlier one measured on no more seeds; "
+                         "@FILE reads arguments from FILE, one a line (bench/results/table.args "
+                         "lists the README table's files)")
     ap.add_argument("--goals", action="store_true",
                     help="with --table: also print issue 11's goals read off the results")
     args = ap.parse_args(argv)

@@ -338,3 +338,17 @@ def test_hu2017_pairs_are_every_two_style_make_up(monkeypatch):
             assert per_cat == [6] * 5
         pairs.add(frozenset(st))
     assert len(pairs) == 6
+
+
+def test_the_readme_table_is_what_its_results_print():
+    # bench/results/table.args lists the runs the README's table merges; the two agree
+    import json
+    from pathlib import Path
+    root = Path(__file__).resolve().parents[1]
+    files = (root / "bench/results/table.args").read_text().split()
+    assert files[0] == "--table" and len(files) > 1
+    merged = B.merge_results([json.loads((root / f).read_text()) for f in files[1:]])
+    readme = (root / "README.md").read_text().split("\n")
+    start = readme.index("### The table") + 1
+    end = next(i for i in range(start, len(readme)) if readme[i].startswith("### "))
+    assert "\n".join(readme[start:end]).strip() == B.summary_table(merged).strip()
