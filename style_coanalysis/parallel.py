@@ -3,7 +3,7 @@
 The drawings need Blender's workers (`blender.batch`); the per-shape work after them (HOG maps,
 style regions) is numpy and scikit-image only, and a pure function of its arguments, so it runs
 in plain processes and gives the serial result. (The analysis' encoding stays in one process:
-its k-means and matrix products already keep every core busy through their threads; its
+its word counts' matrix products already keep every core busy through their threads; its
 dictionaries and word counts in 2 processes took 62.8 s against 66.6 s at 1,050 shapes.) Which
 number of processes is sensible (none inside Blender's own Python, whose `sys.executable` is not
 a Python that can be spawned) is the caller's to decide: `blender.batch.effective_jobs`.

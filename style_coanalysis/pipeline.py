@@ -59,6 +59,7 @@ import numpy as np
 from scipy.optimize import linear_sum_assignment
 from sklearn.cluster import KMeans
 from sklearn.preprocessing import normalize
+from threadpoolctl import threadpool_limits
 
 from . import graph, vocabulary
 from .constraints import labels_to_array, triplets_to_array, validate_labels, validate_triplets
@@ -386,11 +387,19 @@ def _cluster(a, features, params, y, trip, n_clusters, reading=None):
     returns the coordinates every round (its estimator takes them as its samples; its start
     and similarity come from `a`); the other modes return None for them, and the
     unsupervised cut None for its confidence: both come from the last round's coordinates
-    (`_soft_confidence`), which only that round needs."""
+    (`_soft_confidence`), which only that round needs.
+
+    The labels' readings and the unsupervised cut run on one thread: their fits are small
+    (k-means on N x k coordinates, a regression on the labelled shapes refitted for each one
+    left out), and on more threads the BLAS and OpenMP pools wait on each other (3,000 shapes,
+    10% labels: 72 s of rounds on one thread, 135 s on two, 269 s on four; the same
+    partitions; docs/generalisation.md, "The cuts on one thread"). The triplet clustering,
+    whose N x N products gain from threads at a few thousand shapes, runs on every core."""
     rs = params.random_state
     if y is not None:
         n_cls = int(y.max()) + 1
-        clusters, dist, reading = _label_transduction(a, features, y, n_cls, rs, reading)
+        with threadpool_limits(limits=1):
+            clusters, dist, reading = _label_transduction(a, features, y, n_cls, rs, reading)
         conf = dist[np.arange(a.shape[0]), clusters] / np.maximum(dist.sum(axis=1), 1e-12)
         conf[y >= 0] = 1.0
         return clusters, np.clip(conf, 0, 1), n_cls, None, reading
@@ -404,7 +413,8 @@ def _cluster(a, features, params, y, trip, n_clusters, reading=None):
         conf = memb[np.arange(len(raw)), raw] / np.maximum(memb.sum(axis=1), 1e-12)
         clusters = _relabel_by_appearance(raw)
         return clusters, np.clip(conf, 0, 1), int(len(np.unique(clusters))), coords, None
-    clusters = _relabel_by_appearance(graph.partition(a, n_clusters, rs))
+    with threadpool_limits(limits=1):
+        clusters = _relabel_by_appearance(graph.partition(a, n_clusters, rs))
     return clusters, None, int(len(np.unique(clusters))), None, None
 
 
@@ -455,8 +465,9 @@ def _dictionary_agreement(dicts, lines, params, clusters, n_clusters: int) -> fl
     cuts = []
     for d in dicts:
         views, _, _ = _views([d], [np.ones(len(d.bank), bool)], lines, params.n_style_dims)
-        cuts.append(graph.partition(graph.fuse(_graphs(views)[0]), n_clusters,
-                                    params.random_state))
+        a = graph.fuse(_graphs(views)[0])
+        with threadpool_limits(limits=1):
+            cuts.append(graph.partition(a, n_clusters, params.random_state))
     return float(np.mean([ari(c, clusters) for c in cuts]))
 
 

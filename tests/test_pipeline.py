@@ -1,4 +1,6 @@
 """The whole analysis on procedural drawings whose style is known (and never shown to it)."""
+from dataclasses import replace
+
 import numpy as np
 import pytest
 from synthetic import STYLES, make_collection, purity
@@ -195,6 +197,41 @@ def test_the_labels_reading_is_chosen_in_the_first_round_and_kept(collection, mo
     assert all(asked == used == given[0][1] for asked, used in given[1:])
 
 
+def test_the_cuts_run_on_one_thread_and_the_triplet_clustering_on_every_core(collection,
+                                                                            monkeypatch):
+    """The cuts' fits are small, and on more threads their BLAS and OpenMP pools wait on each
+    other (3,000 shapes, 10% labels: twice as slow on two threads as on one); the triplet
+    clustering's N x N products gain from threads."""
+    from threadpoolctl import threadpool_info, threadpool_limits
+    from style_coanalysis import clustering, graph, pipeline
+    seen = {"partition": [], "labels": [], "triplets": []}
+
+    def threads():
+        return max(p["num_threads"] for p in threadpool_info())
+
+    def recording(key, fn):
+        def call(*args, **kwargs):
+            seen[key].append(threads())
+            return fn(*args, **kwargs)
+        return call
+
+    monkeypatch.setattr(graph, "partition", recording("partition", graph.partition))
+    monkeypatch.setattr(pipeline, "_label_transduction",
+                        recording("labels", pipeline._label_transduction))
+    monkeypatch.setattr(clustering.TripletClustering, "fit_predict",
+                        recording("triplets", clustering.TripletClustering.fit_predict))
+    drawings, params = collection[0], replace(PARAMS, max_rounds=1)
+    encoded = pipeline.encode(drawings, params)
+    with threadpool_limits(limits=2):
+        assert threads() == 2
+        analyse(drawings, params, encoded=encoded)
+        analyse(drawings, params, labels=_labels(collection), encoded=encoded)
+        analyse(drawings, params, triplets=_triplets(collection, 30), encoded=encoded)
+    assert seen["partition"] and set(seen["partition"]) == {1}
+    assert seen["labels"] and set(seen["labels"]) == {1}
+    assert seen["triplets"] and set(seen["triplets"]) == {2}
+
+
 def test_the_labels_name_a_cut_the_same_whatever_its_cluster_numbers(monkeypatch):
     """Labels that place equally many labelled shapes whichever of two namings is taken: the
     naming comes from the graph (each cluster named after the labelled shapes it is most tied
@@ -343,8 +380,6 @@ def test_dictionaries_are_independent_draws_and_the_first_is_the_seeds(collectio
     """Each dictionary is its own draw; the first is the one a single-dictionary analysis draws,
     and it is the one the result reports (its words mark the meshes). The views of all of them
     fuse into one graph whose view weights are reported once per kind of view."""
-    from dataclasses import replace
-
     from style_coanalysis.features import collection_maps
     from style_coanalysis.pipeline import encode
     drawings, _, _ = collection

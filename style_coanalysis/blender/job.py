@@ -156,7 +156,7 @@ def _run_steps(meshes: list[Mesh], options: JobOptions):
     # once here because the style regions (stage 3) read them too, and cached beside the
     # drawings so a second run reads them. The maps and regions not cached are computed in
     # `jobs` plain processes (`parallel`), in order: the serial result. The analysis runs in
-    # one: its k-means and matrix products already use every core through their threads.
+    # one: its encoding's matrix products already use every core through their threads.
     from .. import pipeline
     from ..cache import (AnalysisCache, HogCache, RegionCache, analysis_key, cache_key,
                          drawings_digest, hog_key, images_digest, region_key)
