@@ -232,6 +232,26 @@ def test_the_cuts_run_on_one_thread_and_the_triplet_clustering_on_every_core(col
     assert seen["triplets"] and set(seen["triplets"]) == {2}
 
 
+def test_a_cancel_stops_the_labels_leave_one_out_between_folds(collection):
+    """Choosing the labels' reading refits for every labelled shape left out (minutes at
+    thousands of shapes): each fold is a progress step, where a cancel stops the run."""
+    drawings, styles, _ = collection
+    labels = _labels(collection, share=0.5)
+    named = [styles[i] for i, d in enumerate(drawings) if d.name in labels]
+    assert min(np.bincount(named)) >= 3          # enough of every style for the leave-one-out
+    seen = []
+
+    def cancel():
+        return any(stage == "read labels" and done >= 2 for stage, done, _ in seen)
+
+    with pytest.raises(Cancelled, match="read labels"):
+        analyse(drawings, PARAMS, labels=labels, cancel=cancel,
+                progress=lambda *step: seen.append(step))
+    folds = [step for step in seen if step[0] == "read labels"]
+    assert [done for _, done, _ in folds] == [0, 1, 2]
+    assert all(total == len(labels) for _, _, total in folds)
+
+
 def test_the_labels_name_a_cut_the_same_whatever_its_cluster_numbers(monkeypatch):
     """Labels that place equally many labelled shapes whichever of two namings is taken: the
     naming comes from the graph (each cluster named after the labelled shapes it is most tied
