@@ -394,12 +394,13 @@ def _cluster(a, features, params, y, trip, n_clusters, reading=None, prog=None):
     (`_soft_confidence`), which only that round needs. `prog`: where the labels' leave-one-out
     reports its folds (and a cancel stops it).
 
-    The labels' readings and the unsupervised cut run on one thread: their fits are small
-    (k-means on N x k coordinates, a regression on the labelled shapes refitted for each one
-    left out), and on more threads the BLAS and OpenMP pools wait on each other (3,000 shapes,
-    10% labels: 72 s of rounds on one thread, 135 s on two, 269 s on four; the same
-    partitions; docs/generalisation.md, "The cuts on one thread"). The triplet clustering,
-    whose N x N products gain from threads at a few thousand shapes, runs on every core."""
+    The labels' readings run on one thread, as the graph's cuts do (`graph.kmeans`): their
+    fits are small (k-means on N x k coordinates, a regression on the labelled shapes refitted
+    for each one left out), and on more threads the BLAS and OpenMP pools wait on each other
+    (3,000 shapes, 10% labels: 72 s of rounds on one thread, 135 s on two, 269 s on four; the
+    same partitions; docs/generalisation.md, "The cuts on one thread"). The graphs' searches
+    and the triplet clustering, whose N x N products gain from threads at a few thousand
+    shapes, run on every core."""
     rs = params.random_state
     if y is not None:
         n_cls = int(y.max()) + 1
@@ -419,8 +420,7 @@ def _cluster(a, features, params, y, trip, n_clusters, reading=None, prog=None):
         conf = memb[np.arange(len(raw)), raw] / np.maximum(memb.sum(axis=1), 1e-12)
         clusters = _relabel_by_appearance(raw)
         return clusters, np.clip(conf, 0, 1), int(len(np.unique(clusters))), coords, None
-    with threadpool_limits(limits=1):
-        clusters = _relabel_by_appearance(graph.partition(a, n_clusters, rs))
+    clusters = _relabel_by_appearance(graph.partition(a, n_clusters, rs))
     return clusters, None, int(len(np.unique(clusters))), None, None
 
 
@@ -471,9 +471,8 @@ def _dictionary_agreement(dicts, lines, params, clusters, n_clusters: int) -> fl
     cuts = []
     for d in dicts:
         views, _, _ = _views([d], [np.ones(len(d.bank), bool)], lines, params.n_style_dims)
-        a = graph.fuse(_graphs(views)[0])
-        with threadpool_limits(limits=1):
-            cuts.append(graph.partition(a, n_clusters, params.random_state))
+        cuts.append(graph.partition(graph.fuse(_graphs(views)[0]), n_clusters,
+                                    params.random_state))
     return float(np.mean([ari(c, clusters) for c in cuts]))
 
 

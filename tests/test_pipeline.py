@@ -204,7 +204,7 @@ def test_the_cuts_run_on_one_thread_and_the_triplet_clustering_on_every_core(col
     clustering's N x N products gain from threads."""
     from threadpoolctl import threadpool_info, threadpool_limits
     from style_coanalysis import clustering, graph, pipeline
-    seen = {"partition": [], "labels": [], "triplets": []}
+    seen = {"kmeans": [], "labels": [], "triplets": []}
 
     def threads():
         return max(p["num_threads"] for p in threadpool_info())
@@ -215,7 +215,10 @@ def test_the_cuts_run_on_one_thread_and_the_triplet_clustering_on_every_core(col
             return fn(*args, **kwargs)
         return call
 
-    monkeypatch.setattr(graph, "partition", recording("partition", graph.partition))
+    class KMeans(graph.KMeans):               # every cut of the graph is graph.kmeans
+        fit = recording("kmeans", graph.KMeans.fit)
+
+    monkeypatch.setattr(graph, "KMeans", KMeans)
     monkeypatch.setattr(pipeline, "_label_transduction",
                         recording("labels", pipeline._label_transduction))
     monkeypatch.setattr(clustering.TripletClustering, "fit_predict",
@@ -227,7 +230,7 @@ def test_the_cuts_run_on_one_thread_and_the_triplet_clustering_on_every_core(col
         analyse(drawings, params, encoded=encoded)
         analyse(drawings, params, labels=_labels(collection), encoded=encoded)
         analyse(drawings, params, triplets=_triplets(collection, 30), encoded=encoded)
-    assert seen["partition"] and set(seen["partition"]) == {1}
+    assert seen["kmeans"] and set(seen["kmeans"]) == {1}
     assert seen["labels"] and set(seen["labels"]) == {1}
     assert seen["triplets"] and set(seen["triplets"]) == {2}
 
