@@ -10,16 +10,6 @@ PALETTE = ((0.90, 0.30, 0.20, 1.0), (0.20, 0.55, 0.90, 1.0), (0.30, 0.75, 0.30, 
            (0.95, 0.75, 0.15, 1.0), (0.60, 0.35, 0.80, 1.0), (0.15, 0.75, 0.75, 1.0))
 
 
-def label_counts(scene) -> dict:
-    """How many objects of the scene carry each label name."""
-    counts = {}
-    for obj in scene.objects:
-        name = obj.style_coanalysis.label
-        if name:
-            counts[name] = counts.get(name, 0) + 1
-    return counts
-
-
 def _settings(context):
     return context.scene.style_coanalysis
 

@@ -353,7 +353,7 @@ class PSLF(BaseEstimator):
     def _predict_labels(self, V, y):
         """Y_u: the learned memberships (V_u ~ W Y_u, eq. 2); without the transductive term, by
         NNLS per shape, normalised to a distribution."""
-        n, C = V.shape[0], self.classes_.size
+        C = self.classes_.size
         dist = self._Y.copy()
         if self.unlabelled_weight == 0:
             sw = label_metric(V, self._Y.argmax(axis=1), self._lab)

@@ -188,7 +188,7 @@ def test_nan_coordinates_are_refused_naming_the_object(tmp_path):
 def test_unknown_names_in_labels_csv(sample, tmp_path):
     csv = tmp_path / "labels.csv"
     csv.write_text("name,style\nnot_a_shape,turned\nalso_missing,lattice\n")
-    res = expect_refusal(["analyze", sample / "sample.blend", "--out", tmp_path / "o", "--labels", csv],
+    expect_refusal(["analyze", sample / "sample.blend", "--out", tmp_path / "o", "--labels", csv],
                          "not_a_shape", "also_missing")
     assert not (tmp_path / "o" / "result.blend").exists()
 

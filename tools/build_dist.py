@@ -21,7 +21,6 @@ import zipfile
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parent.parent
-BPY_SCRIPTS = None  # found from the bpy module on first use
 
 # pip's --platform tags per Blender platform: several, newest last, so any published wheel fits
 PIP_PLATFORMS = {

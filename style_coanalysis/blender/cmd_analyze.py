@@ -29,7 +29,6 @@ def load_input(path: str, collection: str | None):
     if p.is_dir():
         if collection:
             raise InputError("--collection applies to a .blend INPUT, not to a folder")
-        import bpy
         scene.empty_session()
         meshes = scene.import_mesh_files(p)
         # the shapes become objects of an empty scene: result.blend holds them with their results

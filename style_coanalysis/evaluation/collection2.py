@@ -53,10 +53,6 @@ _Z = np.array([0.0, 0.0, 1.0])
 
 # ----------------------------------------------------------------------------- small helpers
 
-def _v(*a) -> np.ndarray:
-    return np.asarray(a, dtype=np.float64).reshape(3)
-
-
 def _unit(d) -> np.ndarray:
     d = np.asarray(d, np.float64)
     return d / np.linalg.norm(d)
