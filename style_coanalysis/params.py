@@ -1,9 +1,11 @@
-"""The settings a person may change, with the paper's defaults.
+"""The analysis' parameters, with the paper's defaults: the ones a person may set
+(`options.PARAMETERS`) and the default method's fixed design numbers that the encoding reads
+(patch sizes, words, dictionaries, style dimensions).
 
 Three groups: what changes the drawings (and so the per-shape cache key), what changes only
 the global analysis, and the style regions' back-projection. All are frozen dataclasses so they
-hash and print cleanly into reports. Numbers of the default method's design that are not
-settings live beside the code they shape (e.g. `graph.EDGE_LADDER`, `views.LADDER_RUNGS`,
+hash and print cleanly into reports. Other numbers of the default method's design live beside
+the code they shape (e.g. `graph.EDGE_LADDER`, `views.LADDER_RUNGS`,
 `pipeline.SEEDED_MARGIN`), and the regions' own settings in `regions.RegionParams`.
 """
 from __future__ import annotations
@@ -20,7 +22,7 @@ class DrawingSettings:
     n_views: int = 12                    # cameras every 360/n_views degrees of azimuth
     elevation_deg: float = 30.0          # cameras look down at the centroid from this angle
     image_size: int = 200                # square drawings, pixels
-    crease_angle_deg: float = 134.0      # Freestyle dihedral crease threshold (Blender's default)
+    crease_angle_deg: float = 134.0      # Freestyle dihedral crease threshold (Blender's default is 134.43)
     suggestive_contours: bool = False    # paper's choice; off by default (see README for why)
     n_seeds: int = 30                    # surface seeds per shape
     seed: int = 0                        # random seed for surface sampling
@@ -68,9 +70,10 @@ class AnalysisParams:
 class LocalisationParams:
     """Back-projection of style patches to the surface (paper 4.5 and 5.3)."""
 
-    seed_multiplier: int = 3             # seeds drawn per shape: n_seeds times this (the contact
-                                         # sheet shows them all; the paper method reads the first
-                                         # n_seeds; the regions match every window, no seed)
+    seed_multiplier: int = 3             # seeds drawn per shape: n_seeds times this; only the
+                                         # paper method reads seeds (the first n_seeds), the regions
+                                         # match every window, no seed (left at 3: part of the
+                                         # drawings' cache key)
     match_threshold: float = 0.6         # HOG similarity a window must reach to count as a style match
     words_per_cluster: int = 10          # the most discriminative style words of a cluster marked
     # (on the sample: 3 words give area precision 0.69 / recall 0.15, 10 give 0.46 / 0.45, all

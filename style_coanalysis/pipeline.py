@@ -26,7 +26,7 @@ stable) but each stage is made to hold on collections it was not tuned on:
 * the views are the word profile relative to structural look-alikes at every scale of a ladder,
   plus the line character (views.py), fused as graphs (graph.py): no neighbour count or
   collection fraction is chosen for the collection at hand;
-* the number of clusters comes from the fused graph's spectral gap, at most N/4;
+* the number of clusters comes from the fused graph's spectral gap, at most N/4 and 10;
 * labels: with three or more of every style, they start the graph's cut from the labelled
   shapes (seeded k-means), or, where leave-one-out says it predicts held-out labels better,
   decide which features matter first (a classifier fitted to the labelled shapes); with

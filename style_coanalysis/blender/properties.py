@@ -48,7 +48,8 @@ def _param(option: str) -> dict:
 
 
 def default_cache_dir() -> str:
-    """The drawing cache folder used when the preference is empty.
+    """The cache folder (drawings, HOG maps, analyses, regions, dictionaries) used when the
+    preference is empty.
 
     Installed as an extension: the extension's user folder (kept across upgrades, unlike the
     extension folder itself). Imported directly (tests, the command line): the user cache folder.
