@@ -165,11 +165,14 @@ def embedding(a, n_vectors: int) -> tuple[np.ndarray, np.ndarray]:
     else:
         w, u = eigsh(sym, k=m, which="LA", v0=np.ones(n))
     order = np.argsort(-w, kind="stable")
-    w, u = w[order], u[:, order]
-    # an eigenvector's sign is arbitrary: fix it by its largest entry, so the coordinates (and
-    # the canonical order k-means runs in) depend on the shapes only
+    return w[order], fixed_signs(u[:, order])
+
+
+def fixed_signs(u: np.ndarray) -> np.ndarray:
+    """Eigenvectors (columns) with their arbitrary signs fixed by their largest entry, so the
+    coordinates (and the canonical order k-means runs in) depend on the shapes only."""
     big = u[np.argmax(np.abs(u), axis=0), np.arange(u.shape[1])]
-    return w, u * np.where(big < 0, -1.0, 1.0)
+    return u * np.where(big < 0, -1.0, 1.0)
 
 
 def canonical_order(x: np.ndarray, decimals: int = 6) -> np.ndarray:
