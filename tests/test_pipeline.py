@@ -133,6 +133,21 @@ def test_the_order_of_the_shapes_does_not_change_the_partition(collection, unsup
     assert adjusted_rand_score(unsupervised[0].clusters, back) == 1.0
 
 
+@pytest.mark.parametrize("mode", ["labels", "triplets"])
+def test_the_order_of_the_shapes_does_not_change_a_constrained_partition(collection, mode):
+    """The constraints name shapes, so they follow them into any order; the partition too."""
+    from sklearn.metrics import adjusted_rand_score
+    drawings = collection[0]
+    given = ({"labels": _labels(collection)} if mode == "labels"
+             else {"triplets": _triplets(collection, len(drawings))})
+    first = analyse(drawings, PARAMS, **given).clusters
+    perm = np.random.default_rng(5).permutation(len(drawings))
+    again = analyse([drawings[i] for i in perm], PARAMS, **given).clusters
+    back = np.empty_like(again)
+    back[perm] = again
+    assert adjusted_rand_score(first, back) == 1.0
+
+
 def test_triplets_steer_the_clustering(collection, unsupervised):
     """Triplets that describe the categories instead (a user's own notion of style) pull the
     partition towards the categories, away from what the drawings alone give."""
