@@ -24,7 +24,8 @@ def _add_drawing_options(p: argparse.ArgumentParser) -> None:
     p.add_argument("--collection", help="with a .blend INPUT: analyse only this collection's meshes")
     p.add_argument("--jobs", type=int, default=0,
                    help="parallel processes for per-shape work (default 0: all cores)")
-    p.add_argument("--cache", help="cache folder of drawings, HOG maps, analyses, style regions and synthetic dictionaries (default: style_coanalysis under the user cache)")
+    p.add_argument("--cache", help="cache folder of drawings, HOG maps, analyses, style regions "
+                   "and synthetic dictionaries (default: style_coanalysis under the user cache)")
     p.add_argument("--scheduler", metavar="ADDRESS",
                    help="draw the shapes on the Dask cluster of this scheduler (tcp://host:8786; "
                         "needs dask[distributed], see README) instead of --jobs local processes")
@@ -55,7 +56,8 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--labels", help="CSV of name,style for a few shapes (semi-supervised)")
     p.add_argument("--triplets", help="CSV of a,b,c: a is closer in style to b than to c")
     p.add_argument("--clusters", default="auto",
-                   help="'auto' or a number of style clusters, at least 2 and at most the number of shapes; with --labels, the number of labelled styles (default auto)")
+                   help="'auto' or a number of style clusters, at least 2 and at most the "
+                   "number of shapes; with --labels, the number of labelled styles (default auto)")
     p.add_argument("--method", choices=METHODS, default=None, help=f"{METHOD_HELP} (default "
                    f"{DEFAULTS.method})")
     p.add_argument("--seed", type=int, default=0, help="every random choice (default 0)")

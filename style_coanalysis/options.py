@@ -27,7 +27,8 @@ DEFAULTS = AnalysisParams()              # the paper's values, read from params.
 # The analysis parameters a person may set: option name -> (AnalysisParams field, help text).
 # The command's flags (--representatives, ...) and the panel's Advanced properties use these.
 PARAMETERS = {
-    "representatives": ("n_representatives", "words of each layout dictionary (--method paper: k-means centres of each view)"),
+    "representatives": ("n_representatives", "words of each layout dictionary "
+                        "(--method paper: k-means centres of each view)"),
     "eta": ("eta", "PSLF shared proportion of latent factors Kc/K, in (0, 1]; --method paper only"),
     "lam": ("lam", "PSLF smoothness of the view weights (lambda); --method paper only"),
     "beta": ("beta", "PSLF weight of the label term (eq. 2); --method paper only"),

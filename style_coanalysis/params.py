@@ -22,7 +22,7 @@ class DrawingSettings:
     n_views: int = 12                    # cameras every 360/n_views degrees of azimuth
     elevation_deg: float = 30.0          # cameras look down at the centroid from this angle
     image_size: int = 200                # square drawings, pixels
-    crease_angle_deg: float = 134.0      # Freestyle dihedral crease threshold (Blender's default is 134.43)
+    crease_angle_deg: float = 134.0      # Freestyle dihedral crease threshold (Blender's: 134.43)
     suggestive_contours: bool = False    # paper's choice; off by default (see README for why)
     n_seeds: int = 30                    # surface seeds per shape
     seed: int = 0                        # random seed for surface sampling

@@ -189,7 +189,7 @@ def test_unknown_names_in_labels_csv(sample, tmp_path):
     csv = tmp_path / "labels.csv"
     csv.write_text("name,style\nnot_a_shape,turned\nalso_missing,lattice\n")
     expect_refusal(["analyze", sample / "sample.blend", "--out", tmp_path / "o", "--labels", csv],
-                         "not_a_shape", "also_missing")
+                   "not_a_shape", "also_missing")
     assert not (tmp_path / "o" / "result.blend").exists()
 
 
