@@ -250,13 +250,13 @@ def test_the_cuts_run_on_one_thread_and_the_triplet_clustering_on_every_core(col
     assert seen["triplets"] and set(seen["triplets"]) == {2}
 
 
-def test_a_cancel_stops_the_labels_leave_one_out_between_folds(collection):
-    """Choosing the labels' reading refits for every labelled shape left out (minutes at
-    thousands of shapes): each fold is a progress step, where a cancel stops the run."""
+def test_a_cancel_stops_the_labels_cross_validation_between_folds(collection):
+    """Choosing the labels' reading refits for every fold of the labelled shapes: each fold is
+    a progress step, where a cancel stops the run; there are at most ten folds."""
     drawings, styles, _ = collection
     labels = _labels(collection, share=0.5)
     named = [styles[i] for i, d in enumerate(drawings) if d.name in labels]
-    assert min(np.bincount(named)) >= 3          # enough of every style for the leave-one-out
+    assert min(np.bincount(named)) >= 3          # enough of every style for the cross-validation
     seen = []
 
     def cancel():
@@ -267,7 +267,7 @@ def test_a_cancel_stops_the_labels_leave_one_out_between_folds(collection):
                 progress=lambda *step: seen.append(step))
     folds = [step for step in seen if step[0] == "read labels"]
     assert [done for _, done, _ in folds] == [0, 1, 2]
-    assert all(total == len(labels) for _, _, total in folds)
+    assert all(total == min(len(labels), 10) for _, _, total in folds)
 
 
 def test_the_labels_name_a_cut_the_same_whatever_its_cluster_numbers(monkeypatch):
@@ -511,3 +511,19 @@ def test_labels_place_the_centres_and_name_the_clusters_whatever_the_order():
     order = rng.permutation(60)
     again, _, _ = _label_transduction(graph.affinity(x[order]), x[order], y[order], 3)
     assert again.tolist() == classes[order].tolist()
+
+
+def test_the_labels_folds_follow_the_shapes_and_leave_every_style_two_to_fit():
+    from style_coanalysis.pipeline import LABEL_FOLDS, _label_folds
+    rng = np.random.default_rng(0)
+    assert [list(f) for f in _label_folds(rng.normal(size=(9, 4)), np.repeat([0, 1, 2], 3), 3)] \
+        == [[i] for i in range(9)]                          # leave-one-out up to ten labels
+    x, y = rng.normal(size=(47, 4)), np.repeat([0, 1, 2], [20, 3, 24])
+    folds = _label_folds(x, y, 3)
+    assert len(folds) == LABEL_FOLDS and sorted(np.concatenate(folds)) == list(range(47))
+    assert all(np.bincount(y[f], minlength=3).max() <= 3 for f in folds)
+    assert all((np.bincount(y, minlength=3) - np.bincount(y[f], minlength=3)).min() >= 2
+               for f in folds)
+    p = rng.permutation(47)
+    again = _label_folds(x[p], y[p], 3)                     # the same shapes in another order
+    assert sorted(sorted(p[f]) for f in again) == sorted(sorted(f) for f in folds)
