@@ -422,9 +422,9 @@ def _cluster(a, features, params, y, trip, n_clusters, reading=None, prog=None):
 
     The labels' readings run on one thread, as the graph's cuts do (`graph.kmeans`): their
     fits are small (k-means on N x k coordinates, a regression on the labelled shapes refitted
-    for each one left out), and on more threads the BLAS and OpenMP pools wait on each other
-    (3,000 shapes, 10% labels: 72 s of rounds on one thread, 135 s on two, 269 s on four; the
-    same partitions; docs/generalisation.md, "The cuts on one thread"). The graphs' searches
+    for each fold), and on more threads the BLAS and OpenMP pools wait on each other (3,000
+    shapes, 10% labels, when a fold was one label: 72 s of rounds on one thread, 135 s on two,
+    269 s on four; the same partitions; docs/generalisation.md, "The cuts on one thread"). The graphs' searches
     and the triplet clustering, whose N x N products gain from threads at a few thousand
     shapes, run on every core."""
     rs = params.random_state
