@@ -417,16 +417,16 @@ def _cluster(a, features, params, y, trip, n_clusters, reading=None, prog=None):
     returns the coordinates every round (its estimator takes them as its samples; its start
     and similarity come from `a`); the other modes return None for them, and the
     unsupervised cut None for its confidence: both come from the last round's coordinates
-    (`_soft_confidence`), which only that round needs. `prog`: where the labels' cross-validation
-    reports its folds (and a cancel stops it).
+    (`_soft_confidence`), which only that round needs. `prog`: where the labels'
+    cross-validation reports its folds (and a cancel stops it).
 
     The labels' readings run on one thread, as the graph's cuts do (`graph.kmeans`): their
     fits are small (k-means on N x k coordinates, a regression on the labelled shapes refitted
     for each fold), and on more threads the BLAS and OpenMP pools wait on each other (3,000
     shapes, 10% labels, when a fold was one label: 72 s of rounds on one thread, 135 s on two,
-    269 s on four; the same partitions; docs/generalisation.md, "The cuts on one thread"). The graphs' searches
-    and the triplet clustering, whose N x N products gain from threads at a few thousand
-    shapes, run on every core."""
+    269 s on four; the same partitions; docs/generalisation.md, "The cuts on one thread").
+    The graphs' searches and the triplet clustering, whose N x N products gain from threads
+    at a few thousand shapes, run on every core."""
     rs = params.random_state
     if y is not None:
         n_cls = int(y.max()) + 1

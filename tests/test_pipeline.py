@@ -8,7 +8,7 @@ from synthetic import STYLES, make_collection, purity
 from style_coanalysis.features import patch_blocks
 from style_coanalysis.meshes import InputError
 from style_coanalysis.params import AnalysisParams
-from style_coanalysis.pipeline import AnalysisResult, analyse, style_similarity
+from style_coanalysis.pipeline import LABEL_FOLDS, AnalysisResult, analyse, style_similarity
 from style_coanalysis.progress import Cancelled
 
 PARAMS = AnalysisParams(n_representatives=20, n_clusters=3, max_rounds=3, random_state=0)
@@ -267,7 +267,7 @@ def test_a_cancel_stops_the_labels_cross_validation_between_folds(collection):
                 progress=lambda *step: seen.append(step))
     folds = [step for step in seen if step[0] == "read labels"]
     assert [done for _, done, _ in folds] == [0, 1, 2]
-    assert all(total == min(len(labels), 10) for _, _, total in folds)
+    assert all(total == min(len(labels), LABEL_FOLDS) for _, _, total in folds)
 
 
 def test_the_labels_name_a_cut_the_same_whatever_its_cluster_numbers(monkeypatch):
@@ -514,7 +514,7 @@ def test_labels_place_the_centres_and_name_the_clusters_whatever_the_order():
 
 
 def test_the_labels_folds_follow_the_shapes_and_leave_every_style_two_to_fit():
-    from style_coanalysis.pipeline import LABEL_FOLDS, _label_folds
+    from style_coanalysis.pipeline import _label_folds
     rng = np.random.default_rng(0)
     assert [list(f) for f in _label_folds(rng.normal(size=(9, 4)), np.repeat([0, 1, 2], 3), 3)] \
         == [[i] for i in range(9)]                          # leave-one-out up to ten labels
