@@ -325,10 +325,10 @@ def _label_folds(features: np.ndarray, y: np.ndarray, n_classes: int) -> list[np
     """The labelled shapes (rows of `features`, styles `y`) split into the folds that choose
     the labels' reading: one shape a fold up to `LABEL_FOLDS` labels (leave-one-out), else
     up to `LABEL_FOLDS` folds, each style's shapes dealt round them in a canonical order of
-    their features (so the folds follow the shapes, not the file order); folds no style
-    reaches (every style with fewer than ten labels) are left out, as they hide nothing. A
-    fold hides one of every ten of a style's labels, rounded up: with three or more of every
-    style, two or more are left to fit. Ten folds rather than one a labelled shape: the reading refits a classifier
+    their features (so the folds follow the shapes, not the file order); folds beyond the
+    largest style's number of labels hide nothing and are left out. A fold hides one of every
+    ten of a style's labels, rounded up: with three or more of every style, two or more are
+    left to fit. Ten folds rather than one a labelled shape: the reading refits a classifier
     and cuts a graph per fold, which grew as (labelled shapes) x N (600 folds, 2.5 min at
     3,000 shapes with 20% labels); on the benchmark's encodings (34 collections, seeds 0-2)
     ten folds chose as well: 10% labels 26.33 -> 26.33, 20% 27.76 -> 27.78
