@@ -1,11 +1,18 @@
 """The second generated collection (style_coanalysis.evaluation.collection2): labels, geometry
 sanity, determinism and the properties that keep labels from leaking through names, sizes,
 orientation or triangle counts. Pure numpy; no Blender."""
+import os
+import subprocess
+import sys
+from pathlib import Path
+
 import numpy as np
 import pytest
 
 from style_coanalysis.evaluation import collection2 as C
 from style_coanalysis.meshes import Mesh, face_areas, validate
+
+ROOT = Path(__file__).resolve().parent.parent
 
 
 @pytest.fixture(scope="module")
@@ -38,6 +45,24 @@ def test_deterministic():
     c = C.generate(10, seed=8)
     assert any(not np.array_equal(x.vertices, y.vertices) or x.vertices.shape != y.vertices.shape
                for x, y in zip(a, c))
+
+
+def test_the_same_shapes_on_every_processor():
+    """numpy picks some kernels by processor (an AVX-512 argsort that orders equal keys
+    otherwise, an AVX-512 pow that rounds otherwise): the same seed must give the same shapes on
+    every machine. Here generated once as this processor runs numpy and once with its AVX-512
+    kernels switched off (on a machine without AVX-512 both runs are the same run)."""
+    from numpy.core._multiarray_umath import __cpu_features__
+    script = ("import hashlib; from style_coanalysis.evaluation.collection2 import generate; "
+              "print([hashlib.sha1(m.vertices.tobytes() + m.faces.tobytes()).hexdigest() "
+              "for m in generate(5, seed=0)])")
+    avx512 = " ".join(k for k, on in __cpu_features__.items() if on and k.startswith("AVX512"))
+
+    def run(**env):
+        return subprocess.run([sys.executable, "-c", script], env={**os.environ, **env},
+                              cwd=ROOT, capture_output=True, text=True, check=True).stdout
+
+    assert run() == run(NPY_DISABLE_CPU_FEATURES=avx512)
 
 
 def test_every_cell_present_and_even(shapes40):

@@ -10,7 +10,8 @@ Spec in short:
 
 * ``generate(size=120, seed=0, styles=None, categories=None) -> list[Mesh]``: ``size`` shapes
   spread round-robin over the chosen (style, category) grid visited in a seeded random order;
-  fully deterministic for a seed; unknown style/category names raise ``ValueError``.
+  fully deterministic for a seed, on every processor; unknown style/category names raise
+  ``ValueError``.
 * ``STYLES`` = barleytwist (spiral-twisted legs, posts, stretchers and a rail or two),
   shellcarved (plain square legs; fan/shell carvings in relief and scalloped fan crests),
   spindle (galleries of thin beaded spindles between rails), spadefoot (tapered square legs on
@@ -34,6 +35,7 @@ numpy and scipy only, no Blender. Units before scaling are metres, front is -y.
 from __future__ import annotations
 
 import functools
+import math
 
 import numpy as np
 from scipy.spatial import Delaunay, cKDTree
@@ -75,6 +77,16 @@ def _orient(V, F, want):
     F = F.copy()
     F[flip] = F[flip][:, ::-1]
     return F
+
+
+_LIBM_POW = np.frompyfunc(math.pow, 2, 1)
+
+
+def _pow(x, e: float) -> np.ndarray:
+    """x ** e by the C library's pow rather than numpy's, whose AVX-512 kernel rounds some last
+    bits otherwise than other processors do: enough to turn a tessellation count of one of the
+    benchmark's 120 shapes, so machines with and without AVX-512 drew another shape."""
+    return np.asarray(_LIBM_POW(np.asarray(x, np.float64), float(e)), np.float64)
 
 
 def _smoothstep(x):
@@ -207,7 +219,7 @@ def _twist_tube(p0, p1, r, k, pitch, depth, hand, res):
     t = np.linspace(0, 1, n_t)
     end = min(0.25, 1.5 * r / max(L, 1e-9))
     env = _smoothstep(np.minimum(t, 1 - t) / end)
-    groove = ((1 - np.cos(k * theta)) / 2) ** 1.3
+    groove = _pow((1 - np.cos(k * theta)) / 2, 1.3)
     radius = r * (1 - depth * env[:, None] * groove[None, :])
     phi = hand * 2 * np.pi * turns * t
     return _tube(p0, p1, theta, t, radius, phi)
@@ -226,7 +238,7 @@ def _spindle(p0, p1, r, beads, bead_f, res):
     if beads == 1 and res >= 0.8:
         ts += [0.25, 0.75]
         rs += [0.8, 0.8]
-    o = np.argsort(ts)
+    o = np.argsort(ts, kind="stable")
     t = np.asarray(ts)[o]
     rad = r * np.asarray(rs)[o]
     return _tube(p0, p1, theta, t, rad[:, None])
@@ -372,10 +384,10 @@ def _pierce_pattern(kind, W, H, rng):
         y0, y1 = 0.1 * H, 0.88 * H
         s = np.linspace(0, 1, 25)
         y = y0 + (y1 - y0) * s
-        f = W * (0.07 + 0.13 * np.sin(np.pi * np.clip(s * 1.15, 0, 1)) ** 1.5
+        f = W * (0.07 + 0.13 * _pow(np.sin(np.pi * np.clip(s * 1.15, 0, 1)), 1.5)
                  + 0.06 * np.clip((s - 0.8) / 0.2, 0, 1))
         avail = W / 2 - 0.09 * W - f
-        w = avail * np.sin(np.pi * s) ** 0.7
+        w = avail * _pow(np.sin(np.pi * s), 0.7)
         inner = -f
         outer_e = -f - w
         left = np.concatenate([np.stack([inner, y], 1), np.stack([outer_e[::-1], y[::-1]], 1)[1:-1]])
@@ -413,7 +425,7 @@ def _strip_pattern(L, h, rng, kind=None):
 # ----------------------------------------------------------------------------- shells
 
 def _fan_radius(phi, n_ribs, scallop):
-    rib = np.abs(np.sin(n_ribs * phi)) ** 0.6
+    rib = _pow(np.abs(np.sin(n_ribs * phi)), 0.6)
     return (1 - scallop) + scallop * rib, rib
 
 
@@ -1000,7 +1012,9 @@ def _pad_counts(sizes, avail):
     na, nb = grids(lo)
     # many equal faces cross a rounding step together: spend what is left face by face
     rem = int(avail - 2 * np.sum(na * nb))
-    order = np.argsort(-(la * lb))
+    # stable: numpy's AVX-512 argsort orders equal keys otherwise than other processors do,
+    # which gave 90 of the benchmark's 120 shapes other tessellations on other machines
+    order = np.argsort(-(la * lb), kind="stable")
     for _ in range(4):
         for i in order:
             if rem < 2 * min(na[i], nb[i]):
@@ -1072,7 +1086,7 @@ def make_shape(style, category, rng, name, n_triangles=None) -> Mesh:
     seeds = rng.integers(0, 2 ** 63, size=4)
     r_dims, r_style, r_glob, r_asm = (np.random.default_rng(int(s)) for s in seeds)
     target = int(n_triangles) if n_triangles is not None else int(r_glob.integers(TRI_RANGE[0], TRI_RANGE[1] + 1))
-    scale = float(np.exp(r_glob.uniform(np.log(SCALE_RANGE[0]), np.log(SCALE_RANGE[1]))))
+    scale = math.exp(r_glob.uniform(math.log(SCALE_RANGE[0]), math.log(SCALE_RANGE[1])))
     yaw = float(r_glob.uniform(0.0, 360.0))
     b = _Builder(style, r_style)
     _CATEGORY_BUILDERS[category](b, r_dims)
