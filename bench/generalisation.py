@@ -44,7 +44,25 @@ def code_state() -> dict:
             return ""
     dirty = git("status", "--porcelain", "--", "style_coanalysis").splitlines()
     return {"commit": git("rev-parse", "--short", "HEAD"), "uncommitted": dirty,
-            "started": time.strftime("%Y-%m-%d %H:%M:%S UTC", time.gmtime())}
+            "started": time.strftime("%Y-%m-%d %H:%M:%S UTC", time.gmtime()),
+            "kernels": kernels()}
+
+
+def kernels() -> list[str]:
+    """The numeric kernels this machine picked: OpenBLAS's (by processor) and whether numpy
+    runs its AVX-512 ones. A result can depend on them: the synthetic words of analysis seeds
+    other than the default's (which ship with the package) are computed by a k-means that
+    OpenBLAS's Haswell and SkylakeX kernels end differently on 2 of seed 2's 10 dictionaries
+    (docs/generalisation.md, "The same shapes on other machines")."""
+    from threadpoolctl import threadpool_info
+    out = sorted({f"{i['internal_api']} {i.get('version')} {i.get('architecture')}"
+                  for i in threadpool_info() if i.get("user_api") == "blas"})
+    try:
+        from numpy.core._multiarray_umath import __cpu_features__
+        out.append("numpy AVX-512 " + ("on" if __cpu_features__.get("AVX512F") else "off"))
+    except ImportError:
+        pass
+    return out
 
 
 def main(argv=None) -> int:
@@ -125,7 +143,8 @@ def main(argv=None) -> int:
     save(results, complete=True)
     print(B.summary_table(results))
     print(f"\ncode {code['commit']} ({len(code['uncommitted'])} uncommitted files under "
-          f"style_coanalysis/ at the start)", file=sys.stderr)
+          f"style_coanalysis/ at the start); kernels: {'; '.join(code['kernels'])}",
+          file=sys.stderr)
     print(f"\n`{command}`: {results['wall_seconds'] / 60:.1f} min; "
           f"wrote {RESULTS / stem}.json and .png", file=sys.stderr)
     return 0

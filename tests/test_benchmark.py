@@ -352,3 +352,17 @@ def test_the_readme_table_is_what_its_results_print():
     start = readme.index("### The table") + 1
     end = next(i for i in range(start, len(readme)) if readme[i].startswith("### "))
     assert "\n".join(readme[start:end]).strip() == B.summary_table(merged).strip()
+
+
+def test_a_run_records_the_kernels_that_computed_it():
+    """Another machine's OpenBLAS kernels can end a vocabulary's k-means otherwise (seeds other
+    than the default's): a result says which kernels it was measured with."""
+    import importlib.util
+    from pathlib import Path
+    path = Path(__file__).resolve().parent.parent / "bench" / "generalisation.py"
+    spec = importlib.util.spec_from_file_location("generalisation_cli", path)
+    cli = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(cli)
+    kernels = cli.code_state()["kernels"]
+    assert any(k.startswith("openblas ") for k in kernels)
+    assert any(k.startswith("numpy AVX-512 ") for k in kernels)
