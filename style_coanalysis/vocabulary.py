@@ -21,11 +21,15 @@ carvings (collection2 k given 0.689 -> 0.594; with them 0.672, docs/generalisati
 A dictionary is `k` representatives (k-means; each centre replaced by its nearest drawn patch)
 of 20,000 patch descriptors cut at inked pixels, cut from the canvases' HOG maps exactly as the
 collection's windows are (`features.patch_descriptors`), so a word and a window are the same
-kind of numbers. Each dictionary is a pure function of (patch size, k, seed). The default
-analysis seed's ten ship with the package (`SHIPPED`, made by `tools/make_vocabularies.py`; the
-suite checks they are what `compute_words` makes), so no run computes them and every machine
-reads the same words; another seed's are computed once (some seconds each) and kept in the
-cache (`words`).
+kind of numbers. Each dictionary is a function of (patch size, k, seed) and of the machine's
+BLAS kernels: scikit-learn's k-means meets equal distances that OpenBLAS's kernels break
+differently (2 of seed 2's 10 dictionaries differ between its Haswell and SkylakeX kernels, 2-4
+of each seed's with its Prescott ones; docs/generalisation.md, "The same shapes on other
+machines"). The default analysis seed's ten ship with the package (`SHIPPED`, made by
+`tools/make_vocabularies.py`; the suite checks they are what `compute_words` makes, which
+holds where the kernels end the k-means as the shipping machine's did), so no run computes them
+and every machine reads the same words; another seed's are computed once (some seconds each)
+and kept in the cache (`words`).
 """
 from __future__ import annotations
 
@@ -190,7 +194,8 @@ def synthetic_descriptors(size: int, seed: int, n: int = DESCRIPTORS) -> np.ndar
 
 def compute_words(size: int, k: int, seed: int) -> np.ndarray:
     """(k, nb, nb, 36) unit words: k-means representatives of `synthetic_descriptors`, the
-    same on every machine (`representatives` runs on one thread)."""
+    same whatever the number of threads (`representatives` runs on one), not whatever the BLAS
+    kernels (the module's docstring)."""
     desc = synthetic_descriptors(size, seed & 0xFFFFFFFF)
     pick = representatives(desc, k, seed & 0x7FFFFFFF)
     return unit_rows(desc[pick]).reshape(desc[pick].shape).astype(np.float32)
