@@ -81,18 +81,17 @@ def unit_rows(x: np.ndarray) -> np.ndarray:
 
 
 def representatives(descriptors: np.ndarray, k: int, random_state: int = 0) -> np.ndarray:
-    """Indices of up to `k` real patches, one per k-means centre, nearest to their centre.
+    """Indices of up to `k` real patches, one per k-means centre, nearest to their centre: the
+    paper method's representatives of each view's patches.
 
     Clustering runs on unit-normalised descriptors, matching the cosine used in encoding;
     k-means++ and Lloyd to convergence (scikit-learn, one run). Fewer than `k` are returned
-    when there are fewer distinct descriptors.
-
-    The k-means runs on one thread: scikit-learn's Lloyd steps sum each thread's share of the
-    rows and then the shares, so the float32 centres round with the number of threads and
-    near-equal patches trade places. With two threads rather than one, 1 or 2 of the 10 synthetic
-    dictionaries of analysis seeds 1-3 came out otherwise, and seed 3's partition of
-    hu2017-styles-2-4 with them (k given: ARI 0.27 between the two): the same shapes and seed
-    gave another result on a machine with other cores.
+    when there are fewer distinct descriptors. The k-means runs on one thread: scikit-learn's
+    Lloyd steps sum each thread's share of the rows and then the shares, so the float32 centres
+    round with the number of threads and near-equal patches trade places (the default's
+    synthetic words, which used it, came out otherwise on 1 or 2 of seeds 1-3's 10 dictionaries
+    with two threads). The BLAS kernels still round them (the default's words now come from
+    `vocabulary.exact_kmeans`).
     """
     x = unit_rows(descriptors)
     n = len(x)

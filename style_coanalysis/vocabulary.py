@@ -21,15 +21,14 @@ carvings (collection2 k given 0.689 -> 0.594; with them 0.672, docs/generalisati
 A dictionary is `k` representatives (k-means; each centre replaced by its nearest drawn patch)
 of 20,000 patch descriptors cut at inked pixels, cut from the canvases' HOG maps exactly as the
 collection's windows are (`features.patch_descriptors`), so a word and a window are the same
-kind of numbers. Each dictionary is a function of (patch size, k, seed) and of the machine's
-BLAS kernels: scikit-learn's k-means meets equal distances that OpenBLAS's kernels break
-differently (2 of seed 2's 10 dictionaries differ between its Haswell and SkylakeX kernels, 2-4
-of each seed's with its Prescott ones; docs/generalisation.md, "The same shapes on other
-machines"). The default analysis seed's ten ship with the package (`SHIPPED`, made by
-`tools/make_vocabularies.py`; the suite checks they are what `compute_words` makes, which
-holds where the kernels end the k-means as the shipping machine's did), so no run computes them
-and every machine reads the same words; another seed's are computed once (some seconds each)
-and kept in the cache (`words`).
+kind of numbers. Each dictionary is a function of (patch size, k, seed) alone: the k-means runs
+on exact numbers (`exact_kmeans`), so no machine's BLAS kernels or threads draw other words
+(scikit-learn's k-means drew other words for 2 of seed 2's 10 dictionaries under OpenBLAS's
+Haswell and SkylakeX kernels, and for 2-4 of each seed's under its Prescott ones;
+docs/generalisation.md, "The same shapes on other machines"). The default analysis seed's ten
+ship with the package (`SHIPPED`, made by `tools/make_vocabularies.py`; the suite checks they
+are what `compute_words` makes), so no run computes them; another seed's are computed once
+(about a minute for ten) and kept in the cache (`words`).
 """
 from __future__ import annotations
 
@@ -37,15 +36,18 @@ import functools
 from pathlib import Path
 
 import numpy as np
+from scipy import sparse
 from skimage.draw import bezier_curve, ellipse_perimeter, line, polygon_perimeter
+from sklearn.cluster import kmeans_plusplus
 
-from .encoding import representatives, unit_rows
+from .encoding import distinct_rows, unit_rows
 from .features import hog_images, patch_descriptors
 
 CANVAS = 200                  # px, as the drawings
 DESCRIPTORS = 20000           # patches a dictionary is drawn from
 PATCHES_PER_CANVAS = 60       # inked pixels a canvas offers at most
 SHIPPED = Path(__file__).with_name("vocabularies.npz")    # the default seed's, `shipped_name`
+GRID = 2.0 ** -16             # `exact_kmeans`' coordinates
 
 
 def _put(img: np.ndarray, rr, cc) -> None:
@@ -193,12 +195,55 @@ def synthetic_descriptors(size: int, seed: int, n: int = DESCRIPTORS) -> np.ndar
 
 
 def compute_words(size: int, k: int, seed: int) -> np.ndarray:
-    """(k, nb, nb, 36) unit words: k-means representatives of `synthetic_descriptors`, the
-    same whatever the number of threads (`representatives` runs on one), not whatever the BLAS
-    kernels (the module's docstring)."""
+    """(k, nb, nb, 36) unit words: the descriptors of `synthetic_descriptors` nearest to the
+    centres of `exact_kmeans`, so the same bits on every machine and any number of threads."""
     desc = synthetic_descriptors(size, seed & 0xFFFFFFFF)
-    pick = representatives(desc, k, seed & 0x7FFFFFFF)
+    x = unit_rows(desc)
+    labels, centres = exact_kmeans(x, distinct_rows(x, k), seed & 0x7FFFFFFF)
+    xg = _on_grid(x)
+    d2 = ((xg - centres[labels]) ** 2).sum(axis=1)
+    pick = [members[np.argmin(d2[members])]
+            for members in (np.flatnonzero(labels == c) for c in range(len(centres)))
+            if len(members)]
+    pick = np.sort(np.asarray(pick, np.int64))
     return unit_rows(desc[pick]).reshape(desc[pick].shape).astype(np.float32)
+
+
+def _on_grid(x: np.ndarray) -> np.ndarray:
+    """`x` in float64 rounded to multiples of `GRID`."""
+    return np.round(np.asarray(x, np.float64) / GRID) * GRID
+
+
+def exact_kmeans(x: np.ndarray, k: int, random_state: int, max_iter: int = 300):
+    """(labels, centres) of k-means on the unit rows `x`, whose every number is exact.
+
+    Why not scikit-learn's: its float distances round with the BLAS kernels, and where two
+    distances are equal or nearly so the kernels break the tie otherwise, so another machine
+    drew other words from the same seed (docs/generalisation.md, "The same shapes on other
+    machines"). Here the rows and centres lie on a grid of 2^-16, so every product is a
+    multiple of 2^-32 and every sum this runs (a dot product of unit rows, a centre's sum of
+    at most 20,000 rows, k-means++'s potentials, at most 80,000) stays below 2^53 of them: exact
+    in float64 whatever the summation order, hence whatever the kernels and threads. k-means++
+    starts it (scikit-learn's, on those exact distances); Lloyd steps, each centre the mean of
+    its rows rounded to the grid (an emptied centre stays), run until the partition repeats;
+    equal distances go to the lower centre."""
+    xg = _on_grid(x)
+    centres, _ = kmeans_plusplus(xg, k, random_state=random_state)
+    centres = _on_grid(centres)
+    labels = None
+    for _ in range(max_iter):
+        d = (centres * centres).sum(axis=1)[None, :] - 2.0 * (xg @ centres.T)
+        new = d.argmin(axis=1)
+        if labels is not None and np.array_equal(new, labels):
+            break
+        labels = new
+        counts = np.bincount(labels, minlength=k)
+        members = sparse.csr_matrix((np.ones(len(xg)), (labels, np.arange(len(xg)))),
+                                    shape=(k, len(xg)))
+        sums = members @ xg
+        filled = counts > 0
+        centres[filled] = _on_grid(sums[filled] / counts[filled, None])
+    return labels, centres
 
 
 def shipped_name(size: int, k: int, seed: int) -> str:

@@ -1,4 +1,9 @@
 """The default method's synthetic vocabulary: the same words whatever the collection."""
+import os
+import subprocess
+import sys
+from pathlib import Path
+
 import numpy as np
 import pytest
 from conftest import DAMAGES, damage_entry
@@ -6,6 +11,8 @@ from conftest import DAMAGES, damage_entry
 from style_coanalysis import cache, vocabulary
 from style_coanalysis.cache import VocabularyCache
 from style_coanalysis.features import patch_blocks
+
+ROOT = Path(__file__).resolve().parent.parent
 
 
 def test_synthetic_descriptors_are_inked_and_a_function_of_the_seed():
@@ -84,3 +91,42 @@ def test_the_shipped_words_are_what_the_code_makes_for_the_default_seed(monkeypa
     for spec in specs:
         assert vocabulary.words(*spec, False) is shipped[vocabulary.shipped_name(*spec)]
     vocabulary.words.cache_clear()
+
+
+def test_the_same_words_under_other_numeric_kernels():
+    """A seed's words are computed where they are used, so every machine must draw the same
+    ones: here once as this machine runs, once with OpenBLAS's oldest x86 kernels and numpy's
+    AVX-512 ones off. With scikit-learn's k-means the words of this dictionary (an analysis
+    seed 2 draws it) differed between OpenBLAS's Haswell, SkylakeX and Prescott kernels."""
+    from numpy.core._multiarray_umath import __cpu_features__
+    script = ("import hashlib; from style_coanalysis.vocabulary import compute_words; "
+              "print(hashlib.sha1(compute_words(16, 200, 63048422).tobytes()).hexdigest())")
+    avx512 = " ".join(k for k, on in __cpu_features__.items() if on and k.startswith("AVX512"))
+
+    def run(**env):
+        return subprocess.run([sys.executable, "-c", script], env={**os.environ, **env},
+                              cwd=ROOT, capture_output=True, text=True, check=True).stdout
+
+    native = run()
+    assert len(native.strip()) == 40
+    assert native == run(OPENBLAS_CORETYPE="Prescott", NPY_DISABLE_CPU_FEATURES=avx512)
+
+
+def test_exact_kmeans_is_a_partition_into_nearest_centres():
+    rng = np.random.default_rng(0)
+    x = np.concatenate([np.eye(6)[i] + rng.normal(0, 0.05, (40, 6)) for i in range(3)])
+    x /= np.linalg.norm(x, axis=1, keepdims=True)
+    labels, centres = vocabulary.exact_kmeans(x, 3, random_state=0)
+    assert sorted(np.bincount(labels)) == [40, 40, 40]
+    # every row at its nearest centre, every centre on the grid and the mean of its rows
+    xg = vocabulary._on_grid(x)
+    d = ((xg[:, None, :] - centres[None]) ** 2).sum(axis=2)
+    assert np.array_equal(labels, d.argmin(axis=1))
+    np.testing.assert_array_equal(centres, vocabulary._on_grid(centres))
+    for c in range(3):
+        np.testing.assert_allclose(centres[c], xg[labels == c].mean(axis=0),
+                                   atol=vocabulary.GRID)
+    # the rows in another order: the same groups
+    order = rng.permutation(len(x))
+    again, _ = vocabulary.exact_kmeans(x[order], 3, random_state=0)
+    assert len({(a, b) for a, b in zip(labels[order], again)}) == 3
