@@ -322,7 +322,7 @@ def _assign_components(score, comp, diff_comp, C):
     lab = np.full(G, -1)
     for g in order:
         banned = set(lab[diff_comp[g] & (lab >= 0)].tolist())
-        choice = [c for c in np.argsort(-P[g]) if c not in banned]
+        choice = [c for c in np.argsort(-P[g], kind="stable") if c not in banned]
         lab[g] = choice[0] if choice else int(np.argmax(P[g]))
     # exactly C non-empty clusters: give an empty cluster the component that prefers it most
     # among those whose move breaks no cannot-link and does not empty another cluster

@@ -84,7 +84,7 @@ def localise_shape(drawings: ShapeDrawings, vertices: np.ndarray, faces: np.ndar
     half = patch_size / 2.0
     for v in range(drawings.n_views):
         rr, cc = np.nonzero(style[v])
-        order = np.argsort(-sim[v, rr, cc])[:MAX_BOXES_PER_VIEW]
+        order = np.argsort(-sim[v, rr, cc], kind="stable")[:MAX_BOXES_PER_VIEW]
         matches += [(v, float(cc[k] * PIXELS_PER_CELL + half), float(rr[k] * PIXELS_PER_CELL + half),
                      float(sim[v, rr[k], cc[k]])) for k in order]
     return ShapeLocalisation(weights, face_w, best, matches, counts)

@@ -90,7 +90,7 @@ def shaded_image(vertices: np.ndarray, faces: np.ndarray, weights: np.ndarray,
     w = weights if per_face else weights[faces].mean(axis=1)
     w = np.clip(w, 0, 1)[:, None]
     colours = ((1 - w) * GREY + w * ORANGE) * light[:, None]
-    order = np.argsort(-depth[faces].mean(axis=1))                  # far to near
+    order = np.argsort(-depth[faces].mean(axis=1), kind="stable")   # far to near
     img = Image.new("RGB", (size, size), (255, 255, 255))
     draw = ImageDraw.Draw(img)
     for f in order:
