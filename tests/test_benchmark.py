@@ -355,8 +355,8 @@ def test_the_readme_table_is_what_its_results_print():
 
 
 def test_a_run_records_the_kernels_that_computed_it():
-    """Another machine's OpenBLAS kernels can end a vocabulary's k-means otherwise (seeds other
-    than the default's): a result says which kernels it was measured with."""
+    """Numeric kernels differ between machines (numpy's AVX-512 sorts, OpenBLAS's kernels round
+    sums otherwise): a result says which ones measured it."""
     import importlib.util
     from pathlib import Path
     path = Path(__file__).resolve().parent.parent / "bench" / "generalisation.py"
