@@ -490,10 +490,11 @@ def _dictionary_agreement(dicts, lines, params, clusters, n_clusters: int) -> fl
     each dictionary's own cut into as many clusters (its every word's views and the line
     character, fused as the style graph is). Where the cut is one of several the data support
     about equally, dictionaries of other seeds and patch sizes cut differently; that is also
-    where another analysis seed or a re-exported file regroups shapes. On the generalisation
-    benchmark (36 collections, 3 seeds, k given) 24 of the 33 runs at 0.8 or more were at least
-    0.9 pure in style, 10 of the 75 below (README, "The report"; report.FIRM). None with one
-    dictionary or one cluster."""
+    where another analysis seed regroups shapes (a re-exported file too, but the agreement does
+    not foretell which: docs/generalisation.md). On the generalisation benchmark (36
+    collections, 3 seeds, k given) 18 of the 29 runs at 0.8 or more were at least 0.9 pure in
+    style, 18 of the 79 below (README, "The report"; report.FIRM). None with one dictionary or
+    one cluster."""
     if len(dicts) < 2 or n_clusters < 2:
         return None
     cuts = []
